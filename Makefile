@@ -1,0 +1,47 @@
+# rotorflow: every target installs what it needs first, and does nothing when all is there.
+SHELL := bash
+.SHELLFLAGS := -eu -o pipefail -c
+.DELETE_ON_ERROR:
+.DEFAULT_GOAL := help
+MAKEFLAGS += --warn-undefined-variables --no-builtin-rules
+
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+CASE ?= cases/default.toml
+PYTEST_ARGS ?=
+
+-include mk/*.mk
+
+.PHONY: help venv demo test lint bench case clean
+
+help: ## list the targets
+	@grep -hE '^[a-zA-Z_-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  %-10s %s\n", $$1, $$2}'
+
+$(STAMP): pyproject.toml
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[dev]'
+	@touch $@
+
+venv: $(STAMP) ## create .venv and install rotorflow with its Python dependencies
+
+demo: $(STAMP) ## set up, then run the built-in default case
+	$(VENV)/bin/rotorflow geometry $(CASE)
+	$(VENV)/bin/rotorflow table $(CASE) --out build/$(basename $(notdir $(CASE)))/chamber_table.csv
+
+case: $(STAMP) ## run one case: make case CASE=path/to/case.toml
+	$(VENV)/bin/rotorflow geometry $(CASE) --json
+
+test: $(STAMP) ## set up, then run the tests (all tiers but slow)
+	$(PY) -m pytest -m "not slow" $(PYTEST_ARGS)
+
+lint: $(STAMP) ## ruff over the whole tree
+	$(VENV)/bin/ruff check .
+
+bench: $(STAMP) ## run-time-vs-error benchmarks into bench/results/
+	$(PY) -m bench.run
+
+clean: ## remove build outputs (keeps .venv)
+	rm -rf build bench/results .pytest_cache .ruff_cache

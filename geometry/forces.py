@@ -1,0 +1,122 @@
+"""Chamber pressure of the ideal 0D cycle, net rotor loads and the power split.
+
+Seed 000 sections 4.3-4.5: ideal gas, adiabatic compression, no leakage, no port
+losses and matched discharge, so the pressure of a chamber follows from its volume
+alone.  Torques here are those the rotors exert on the fluid (what a shaft supplies),
+the opposite of the fluid's torques in :class:`~.machine.ChamberCurves`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .machine import GAMMA_AIR, InternalGearMachine
+
+
+def adiabatic_pressure(volume, eps_v: float, p_suction: float = 1.0e5, gamma: float = GAMMA_AIR):
+    """Pressure along a chamber's life: suction, adiabatic compression, matched discharge.
+
+    Suction at ``p_suction`` until the volume peaks; then ``p (V_max/V)^gamma`` until
+    the volume has fallen by the built-in ratio ``eps_v``; then the discharge pressure
+    ``p_suction eps_v^gamma`` (matched compression) to the end.
+    """
+    v = np.asarray(volume, dtype=float)
+    k = int(np.argmax(v))
+    v_max = v[k]
+    p_dis = p_suction * eps_v**gamma
+    p = np.full_like(v, p_suction)
+    tail = v[k:]
+    # Past the built-in ratio the chamber is at discharge pressure; only compute the
+    # adiabatic law where the volume is still above V_max / eps_v (no overflow near 0).
+    compressing = tail > v_max / eps_v
+    comp = np.full_like(tail, p_dis)
+    comp[compressing] = p_suction * (v_max / tail[compressing]) ** gamma
+    p[k:] = np.minimum(comp, p_dis)
+    return p
+
+
+def cycle_work(volume_max: float, eps_v: float, p_suction: float, gamma: float = GAMMA_AIR):
+    """Indicated work per chamber and cycle, seed 000 Eq. 17."""
+    p_dis = p_suction * eps_v**gamma
+    return gamma / (gamma - 1.0) * (p_dis * volume_max / eps_v - p_suction * volume_max)
+
+
+@dataclass(frozen=True)
+class PowerSplit:
+    phi: np.ndarray  # one lobe period of outer-rotor angle
+    torque_outer: np.ndarray  # net shaft torque of the outer rotor on the fluid [N m]
+    torque_inner: np.ndarray
+    force_outer: np.ndarray  # (n, 2) net force of the fluid on the outer rotor [N]
+    power_ratio_outer: np.ndarray  # P1 / P_in
+    power_ratio_inner: np.ndarray  # P2 / P_in
+    mean_power_per_omega1: float  # T1_mean + m21 T2_mean
+    cycle_power_per_omega1: float  # W_cyc N1 / (2 pi), Eq. 18
+    driven: str
+    pi_max: float
+
+    @property
+    def power_balance_error(self) -> float:
+        return abs(self.mean_power_per_omega1 / self.cycle_power_per_omega1 - 1.0)
+
+
+def net_loads(machine: InternalGearMachine, pressure: np.ndarray):
+    """Sum chamber loads over every chamber present (Eq. 16), over one lobe period.
+
+    Chamber k lags the first by k periods; on the uniform grid a period is exactly
+    ``points_per_period`` samples, so shifting is indexing.  Returns angles, net fluid
+    torques on both rotors and the net fluid force on the outer rotor.
+    """
+    c = machine.curves
+    m = machine.points_per_period
+    n = len(c.phi)
+    reps = -(-n // m)
+    pad = reps * m - n
+
+    def fold(x):
+        x = np.concatenate([x, np.zeros((pad,) + x.shape[1:])])
+        return x.reshape((reps, m) + x.shape[1:]).sum(0)
+
+    t1 = fold(pressure * c.torque1)
+    t2 = fold(pressure * c.torque2)
+    f1 = fold(pressure[:, None] * c.force1)
+    return c.phi[:m], t1, t2, f1
+
+
+def power_split(
+    machine: InternalGearMachine,
+    eps_v: float,
+    driven: str = "auto",
+    p_suction: float = 1.0e5,
+    gamma: float = GAMMA_AIR,
+) -> PowerSplit:
+    """Seed 000 Eqs. 17-22: power balance, power ratios, driven rotor and Pi_max."""
+    c = machine.curves
+    p = adiabatic_pressure(c.volume, eps_v, p_suction, gamma)
+    # Gauge pressure: a uniform pressure loads no rotor, so only p - p_suction matters,
+    # and leaving it out keeps the sums free of cancellation.
+    phi, t1, t2, f1 = net_loads(machine, p - p_suction)
+    shaft1, shaft2 = -t1, -t2
+    m21 = machine.pair.m21
+    p_in = shaft1 + m21 * shaft2
+    r1 = shaft1 / p_in
+    r2 = m21 * shaft2 / p_in
+    w = cycle_work(machine.volume_max, eps_v, p_suction, gamma)
+    cycle = w * machine.pair.lobes_outer / (2.0 * math.pi)
+    if driven == "auto":
+        driven = "outer" if r1.max() > r2.max() else "inner"
+    idle = r2 if driven == "outer" else r1
+    return PowerSplit(
+        phi=phi,
+        torque_outer=shaft1,
+        torque_inner=shaft2,
+        force_outer=f1,
+        power_ratio_outer=r1,
+        power_ratio_inner=r2,
+        mean_power_per_omega1=float(np.mean(p_in)),
+        cycle_power_per_omega1=cycle,
+        driven=driven,
+        pi_max=float(np.max(np.abs(idle))),
+    )

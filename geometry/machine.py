@@ -1,0 +1,192 @@
+"""A swept internal-gear machine: chamber curves, forces, torques and power split.
+
+Volumes, forces and torques of a 3D chamber are integrals along z of the section
+chamber (seed 000 Eq. 7 and Eqs. 13-15, generalised by the scale and twist laws of
+:mod:`.sweep`): the section at height z of the chamber whose low-pressure-end section is
+at angle ``phi`` is the planar chamber at ``phi - twist(z)``, scaled by ``scale(z)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.optimize import minimize_scalar
+
+from .pin_gerotor import TWO_PI, PinGerotor
+from .section import POINTS_PER_PERIOD, SectionChamber, section_chamber
+from .sweep import Sweep
+
+GAMMA_AIR = 1.4
+
+
+@dataclass(frozen=True)
+class ChamberCurves:
+    """One 3D chamber against its low-pressure-end angle ``phi`` (uniform grid)."""
+
+    phi: np.ndarray
+    volume: np.ndarray
+    dvolume: np.ndarray
+    area_lp: np.ndarray
+    area_hp: np.ndarray
+    force1: np.ndarray  # (n, 2) force of the fluid on the outer rotor per unit pressure
+    torque1: np.ndarray  # torque of the fluid on the outer rotor per unit pressure
+    torque2: np.ndarray  # same on the inner rotor, about its own axis
+    seal_lead: np.ndarray  # sealing line toward the older chamber
+    seal_trail: np.ndarray  # sealing line toward the younger chamber
+    perimeter_lp: np.ndarray  # rotor edge length of the chamber on the lp end plate
+    perimeter_hp: np.ndarray
+    step: float
+
+
+def _extend(section: SectionChamber, values: np.ndarray) -> CubicSpline:
+    """Spline of a section quantity, zero outside the chamber's life."""
+    return CubicSpline(section.psi, values, bc_type="not-a-knot", extrapolate=False)
+
+
+def _eval(spline: CubicSpline, x, nu: int = 0):
+    out = spline(x, nu)
+    return np.nan_to_num(out, nan=0.0)
+
+
+def _linear(section: SectionChamber, values: np.ndarray, x):
+    """Linear interpolation on the period-aligned grid, zero outside the life.
+
+    Used for loads: it is local and linear in the node values, so chambers one period
+    apart, sampled at the same fraction of a cell, sum exactly as their nodes do (a
+    spline's end conditions would break that cancellation).
+    """
+    psi = section.psi
+    h = psi[1] - psi[0]
+    t = (np.asarray(x) - psi[0]) / h
+    i = np.floor(t).astype(int)
+    f = t - i
+    ok = (i >= 0) & (i < len(psi) - 1)
+    i = np.clip(i, 0, len(psi) - 2)
+    out = values[i] * (1.0 - f) + values[i + 1] * f
+    return np.where(ok, out, 0.0)
+
+
+@dataclass(frozen=True)
+class InternalGearMachine:
+    pair: PinGerotor
+    sweep: Sweep
+    points_per_period: int = POINTS_PER_PERIOD
+
+    @cached_property
+    def section(self) -> SectionChamber:
+        return section_chamber(self.pair, self.points_per_period)
+
+    @property
+    def period(self) -> float:
+        return TWO_PI / self.pair.lobes_outer
+
+    @property
+    def life_2d(self) -> float:
+        return self.section.phi_f - self.section.phi_i
+
+    @property
+    def wrap_bar(self) -> float:
+        """Normalised wrap angle, seed 000 Eq. 8."""
+        return self.sweep.wrap / self.life_2d
+
+    @property
+    def pitch_length(self) -> float | None:
+        """Seed 000 Eq. 23 (constant lead only); None for straight rotors."""
+        if self.sweep.wrap == 0.0:
+            return None
+        return TWO_PI * self.sweep.length / (self.pair.lobes_outer * self.sweep.wrap)
+
+    @cached_property
+    def curves(self) -> ChamberCurves:
+        sec = self.section
+        sw = self.sweep
+        step = self.period / self.points_per_period
+        n = int(math.ceil((self.life_2d + sw.wrap) / step)) + 1
+        phi = sec.phi_i + step * np.arange(n)
+        z, wz = sw.nodes()
+        s = sw.scale(z)
+        psi = phi[:, None] - sw.twist(z)[None, :]
+        a_spl = _extend(sec, sec.area)
+        w2 = wz * s * s
+        volume = _eval(a_spl, psi) @ w2
+        dvolume = _eval(a_spl, psi, 1) @ w2
+        fx = _linear(sec, sec.dy, psi) @ (wz * s)
+        fy = -(_linear(sec, sec.dx, psi) @ (wz * s))
+        t1 = _linear(sec, sec.tq1, psi) @ w2
+        t2 = _linear(sec, sec.tq2, psi) @ w2
+        area_lp = _eval(a_spl, phi) * float(sw.scale(0.0)) ** 2
+        area_hp = _eval(a_spl, phi - sw.wrap) * float(sw.scale(sw.length)) ** 2
+        seal_lead, seal_trail = self._seal_lengths(phi, z, wz, s)
+        per = _extend(sec, sec.perimeter_outer + sec.perimeter_inner)
+        return ChamberCurves(
+            phi=phi,
+            volume=volume,
+            dvolume=dvolume,
+            area_lp=area_lp,
+            area_hp=area_hp,
+            force1=np.stack([fx, fy], -1),
+            torque1=t1,
+            torque2=t2,
+            seal_lead=seal_lead,
+            seal_trail=seal_trail,
+            perimeter_lp=_eval(per, phi),
+            perimeter_hp=_eval(per, phi - sw.wrap) * float(sw.scale(sw.length)),
+            step=step,
+        )
+
+    def _seal_lengths(self, phi, z, wz, s):
+        """Length of the 3D contact lines bounding the chamber (leading and trailing).
+
+        A contact point c(psi) of the section sweeps the space curve
+        (scale(z) c(phi - twist(z)), z); its length element is
+        sqrt(1 + |scale' c - scale twist' c'|^2) dz, counted where the chamber exists.
+        """
+        sec = self.section
+        sw = self.sweep
+        psi = phi[:, None] - sw.twist(z)[None, :]
+        alive = (psi >= sec.phi_i) & (psi <= sec.phi_f)
+        ds, dt = sw.dscale(z)[None, :], sw.dtwist(z)[None, :]
+        out = []
+        for pts in (sec.lead, sec.trail):
+            cx, cy = _extend(sec, pts[:, 0]), _extend(sec, pts[:, 1])
+            c = np.stack([_eval(cx, psi), _eval(cy, psi)], -1)
+            dc = np.stack([_eval(cx, psi, 1), _eval(cy, psi, 1)], -1)
+            tang = ds[..., None] * c - (s[None, :] * dt)[..., None] * dc
+            elem = np.sqrt(1.0 + np.sum(tang * tang, -1)) * alive
+            out.append(elem @ wz)
+        return out[0], out[1]
+
+    # ----------------------------------------------------------------- summary figures
+    def volume_at(self, phi) -> np.ndarray:
+        """Chamber volume at any low-pressure-end angle(s), by the same quadrature."""
+        z, wz = self.sweep.nodes()
+        s = self.sweep.scale(z)
+        psi = np.atleast_1d(phi)[:, None] - self.sweep.twist(z)[None, :]
+        return _eval(_extend(self.section, self.section.area), psi) @ (wz * s * s)
+
+    @cached_property
+    def volume_max(self) -> float:
+        """Largest chamber volume, polished between grid points (not the sampled maximum)."""
+        c = self.curves
+        k = int(np.argmax(c.volume))
+        lo, hi = c.phi[max(k - 1, 0)], c.phi[min(k + 1, len(c.phi) - 1)]
+        res = minimize_scalar(
+            lambda x: -float(self.volume_at(x)[0]),
+            bounds=(lo, hi),
+            method="bounded",
+            options={"xatol": 1e-10},
+        )
+        return max(float(-res.fun), float(c.volume[k]))
+
+    @property
+    def swept_volume(self) -> float:
+        """Volume drawn in per outer-rotor revolution: N1 V_max (seed 000, section 3.1.1)."""
+        return self.pair.lobes_outer * self.volume_max
+
+    @property
+    def cylinder_volume(self) -> float:
+        return math.pi * self.pair.diameter**2 / 4.0 * self.sweep.length

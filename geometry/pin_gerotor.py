@@ -1,0 +1,285 @@
+"""Pin-generated internal gear pair (seed 000, section 2; Vecchiato et al. 2001).
+
+The outer rotor 1 carries ``N1`` circular pins of radius ``rho`` on the radius ``a``;
+its conjugate mate, the inner rotor 2 with ``N2 = N1 - 1`` lobes, is the envelope of
+the pin circle in the inner rotor's frame (an inner offset of an extended epicycloid).
+Between the pins the outer profile is closed by a fillet: by default the conjugate one
+(the envelope of the inner rotor in the outer frame), which makes the smallest chamber
+area zero.
+
+Frames (all lengths in metres, angles in radians):
+
+* fixed frame: outer axis ``O1 = (0, 0)``, inner axis ``O2 = (0, E)``, pitch point
+  ``P = (0, r1)`` with ``r1 = N1 E``; both rotors turn counter-clockwise,
+  ``phi2 = m21 phi1`` with ``m21 = N1 / N2``;
+* S1 (outer rotor) and S2 (inner rotor, origin ``O2``) turn with their rotors and
+  coincide with the fixed frame at ``phi1 = 0``; pin 0 sits on +y.
+
+Everything is parametrised by the *generation angle* ``g``: the outer-rotor angle at
+which pin 0 touches the inner profile point ``psi2(g)``.  The inner profile is analytic
+in ``g`` (smooth even at the undercut limit, where its arc-length speed vanishes), and
+so are its normals, which is what makes the chamber areas converge fast.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from rotorflow.errors import CaseError
+
+TWO_PI = 2.0 * math.pi
+
+
+def rot(angle):
+    """Rotation matrices for an angle or an array of angles, shape (..., 2, 2)."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+def rotate(points, angle):
+    """Rotate points (..., 2) counter-clockwise by ``angle`` (scalar or broadcastable)."""
+    c, s = np.cos(angle), np.sin(angle)
+    x, y = points[..., 0], points[..., 1]
+    return np.stack([c * x - s * y, s * x + c * y], -1)
+
+
+def cross(u, v):
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def sigma_limit(lobes_outer: int, lam: float, samples: int = 20001) -> float:
+    """Undercut limit sigma_lim(N1, lambda) of seed 000 Eq. 4.
+
+    ``zeta(phi)`` is the normalised curvature radius of the pin-centre trochoid in the
+    inner frame; the pin radius must stay below its smallest positive value.  A coarse
+    scan brackets the minimum, a bounded scalar search polishes it to machine precision.
+    """
+    if lobes_outer < 2:
+        raise CaseError(f"lobes_outer must be at least 2, got {lobes_outer}")
+    if not lam > 1.0:
+        raise CaseError(f"lambda must be greater than 1 (pins outside the pitch circle), got {lam}")
+    m21 = lobes_outer / (lobes_outer - 1)
+
+    def zeta(phi):
+        num = (1.0 - m21) * (1.0 + lam**2 - 2.0 * lam * np.cos(phi)) ** 1.5
+        den = lam**2 * (1.0 - m21) - m21 + lam * (2.0 * m21 - 1.0) * np.cos(phi)
+        return num / den
+
+    phi = np.linspace(0.0, math.pi, samples)
+    z = zeta(phi)
+    z = np.where(z > 0.0, z, np.inf)
+    i = int(np.argmin(z))
+    if not np.isfinite(z[i]):
+        raise CaseError(f"no undercut-free pin radius exists for N1={lobes_outer}, lambda={lam}")
+    lo, hi = phi[max(i - 1, 0)], phi[min(i + 1, samples - 1)]
+    res = minimize_scalar(
+        lambda p: zeta(p) if zeta(p) > 0 else np.inf,
+        bounds=(lo, hi),
+        method="bounded",
+        options={"xatol": 1e-13},
+    )
+    return float(min(res.fun, z[i]))
+
+
+def pressure_angle_at_pitch(lam: float, sigma: float) -> float | None:
+    """Pressure angle when the contact passes the pitch point (seed 000 Eq. 5), radians.
+
+    Returns None when the pin never touches at the pitch point, i.e. when
+    ``lambda - 1 > sigma`` (the pitch point lies outside the pin circle's reach).
+    """
+    c = (1.0 + sigma**2 - lam**2) / (2.0 * sigma)
+    if not -1.0 <= c <= 1.0:
+        return None
+    return math.acos(c) - math.pi / 2.0
+
+
+@dataclass(frozen=True)
+class PinGerotor:
+    """A conjugate pin-generated internal gear pair of maximum outer diameter ``diameter``."""
+
+    lobes_outer: int
+    lam: float
+    sigma: float
+    diameter: float
+
+    def __post_init__(self):
+        if self.lobes_outer < 2:
+            raise CaseError(f"lobes_outer must be at least 2, got {self.lobes_outer}")
+        if not self.lam > 1.0:
+            raise CaseError(f"lambda must be greater than 1, got {self.lam}")
+        if not self.diameter > 0.0:
+            raise CaseError(f"diameter must be positive, got {self.diameter}")
+        if not self.sigma > 0.0:
+            raise CaseError(f"sigma must be positive, got {self.sigma}")
+        lim = self.sigma_lim
+        # Relative slack: sigma_bar = 1 is the paper's optimum and must be accepted even
+        # after a round trip through decimal input.
+        if self.sigma > lim * (1.0 + 1e-9):
+            raise CaseError(
+                f"sigma = {self.sigma:.6g} is above the undercut limit sigma_lim = {lim:.6g} "
+                f"for N1={self.lobes_outer}, lambda={self.lam:g} (seed 000 Eq. 4)"
+            )
+
+    # ---------------------------------------------------------------- dimensions (Eq. 1)
+    @cached_property
+    def sigma_lim(self) -> float:
+        return sigma_limit(self.lobes_outer, self.lam)
+
+    @property
+    def lobes_inner(self) -> int:
+        return self.lobes_outer - 1
+
+    @property
+    def m21(self) -> float:
+        return self.lobes_outer / self.lobes_inner
+
+    @cached_property
+    def E(self) -> float:
+        """Centre distance, Eq. 1."""
+        n1 = self.lobes_outer
+        return self.diameter / (2.0 * n1 * (self.lam - self.sigma + 2.0 / n1))
+
+    @property
+    def r1(self) -> float:
+        return self.lobes_outer * self.E
+
+    @property
+    def a(self) -> float:
+        return self.lam * self.r1
+
+    @property
+    def rho(self) -> float:
+        return self.sigma * self.r1
+
+    @property
+    def O2(self) -> np.ndarray:
+        return np.array([0.0, self.E])
+
+    @property
+    def P(self) -> np.ndarray:
+        return np.array([0.0, self.r1])
+
+    @property
+    def pressure_angle(self) -> float | None:
+        return pressure_angle_at_pitch(self.lam, self.sigma)
+
+    @property
+    def pin_edge(self) -> float:
+        """Half-angle of the pin arc that ever carries contact: asin(1/lambda).
+
+        The contact normal of a pin passes through the pitch point, which runs on the
+        pitch circle of radius r1 < a; the normals from the pin centre to that circle
+        fill a cone of half-angle asin(r1/a).
+        """
+        return math.asin(1.0 / self.lam)
+
+    def pin_centre(self, k):
+        """Centre of pin k in S1 (pin 0 on +y, counter-clockwise numbering)."""
+        ang = math.pi / 2.0 + TWO_PI * np.asarray(k, dtype=float) / self.lobes_outer
+        return self.a * np.stack([np.cos(ang), np.sin(ang)], -1)
+
+    def pin_point(self, k, theta):
+        """Point of pin k at pin angle theta (0 faces O1, counter-clockwise positive), S1."""
+        c = self.pin_centre(k)
+        inward = -c / self.a
+        return c + self.rho * rotate(inward, theta)
+
+    # ---------------------------------------------------------------- inner profile psi2
+    def _generation(self, g):
+        """Contact point X(g) and unit normal u(g) of pin 0 at outer angle g, fixed frame."""
+        g = np.asarray(g, dtype=float)
+        c = self.a * np.stack([-np.sin(g), np.cos(g)], -1)
+        d = self.P - c
+        u = d / np.linalg.norm(d, axis=-1)[..., None]
+        return c + self.rho * u, u
+
+    def inner_point(self, g):
+        """psi2(g) in S2 (origin O2); g spans [0, 2 pi N2) for the closed profile."""
+        x, _ = self._generation(g)
+        return rotate(x - self.O2, -self.m21 * np.asarray(g, dtype=float))
+
+    def inner_normal(self, g):
+        """Unit normal of psi2 at g in S2, pointing out of the inner rotor."""
+        _, u = self._generation(g)
+        return -rotate(u, -self.m21 * np.asarray(g, dtype=float))
+
+    # ---------------------------------------------------------------- conjugate fillet
+    def _fillet_raw(self, g):
+        """Second solution of the equation of meshing for psi2(g).
+
+        Returns (phi1 mod 2 pi, S1 point) of the fillet between pin 0 and pin 1 that
+        psi2(g) generates.  The normal line of psi2(g) at inner angle p must pass through
+        the pitch point: r2 cos(p + beta) = -(y x n), two roots per g; one is the
+        generating instant m21 g (the pin contact), the other is the fillet contact.
+        """
+        g = np.asarray(g, dtype=float)
+        y = self.inner_point(g)
+        n = self.inner_normal(g)
+        r2 = self.lobes_inner * self.E
+        beta = np.arctan2(n[..., 1], n[..., 0])
+        c = np.clip(-cross(y, n) / r2, -1.0, 1.0)
+        acos = np.arccos(c)
+        p_gen = self.m21 * g
+        p1, p2 = acos - beta, -acos - beta
+        d1 = np.abs(np.angle(np.exp(1j * (p1 - p_gen))))
+        d2 = np.abs(np.angle(np.exp(1j * (p2 - p_gen))))
+        p = np.where(d1 > d2, p1, p2)
+        phi1 = p / self.m21
+        x = rotate(y, p) + self.O2
+        pt = rotate(x, -phi1)
+        # Move the point into the sector of fillet 0 (between pins 0 and 1) by adding
+        # whole inner turns: each adds 2 pi / m21 to phi1 and turns the point by 2 pi / N1.
+        n1 = self.lobes_outer
+        ang = np.arctan2(pt[..., 1], pt[..., 0]) - math.pi / 2.0
+        k = np.mod(-np.floor(ang / (TWO_PI / n1)), n1)
+        phi1 = np.mod(phi1 + k * TWO_PI / self.m21, TWO_PI)
+        pt = rotate(pt, k * TWO_PI / n1)
+        return phi1, pt
+
+    @cached_property
+    def fillet_range(self) -> tuple[float, float]:
+        """Generation angles (g_lo, g_hi) where the conjugate fillet meets the pin arcs.
+
+        The fillet is generated by the inner tip (g = pi); it ends where it reaches the
+        edge of the pin cone, at polar angle ``edge`` on either side of the fillet middle.
+        """
+        edge_pt = self.pin_point(0, -self.pin_edge)  # edge of pin 0 toward pin 1
+        edge_ang = math.atan2(edge_pt[1], edge_pt[0])
+        mid = math.pi / 2.0 + math.pi / self.lobes_outer
+
+        def off(g):
+            _, pt = self._fillet_raw(g)
+            return np.abs(np.arctan2(pt[..., 1], pt[..., 0]) - mid) - (mid - edge_ang)
+
+        # off < 0 inside the fillet sector: bracket the end by a scan from the tip.
+        gs = math.pi + np.linspace(0.0, math.pi, 4001)
+        vals = off(gs)
+        k = int(np.argmax(vals > 0.0))
+        if k == 0:
+            raise CaseError("degenerate pin profile: no conjugate fillet between pins")
+        g_hi = brentq(lambda g: float(off(g)), gs[k - 1], gs[k], xtol=1e-14)
+        return 2.0 * math.pi - g_hi, g_hi
+
+    def fillet(self, g):
+        """Fillet between pin 0 and pin 1: (phi1 of contact, S1 point) for g in fillet_range."""
+        return self._fillet_raw(g)
+
+    # ---------------------------------------------------------------- derivatives
+    def inner_derivative(self, g):
+        """d psi2 / dg in S2 (analytic)."""
+        g = np.asarray(g, dtype=float)
+        c = self.a * np.stack([-np.sin(g), np.cos(g)], -1)
+        dc = self.a * np.stack([-np.cos(g), -np.sin(g)], -1)
+        d = self.P - c
+        nd = np.linalg.norm(d, axis=-1)[..., None]
+        u = d / nd
+        du = (-dc - u * np.sum(u * -dc, axis=-1)[..., None]) / nd
+        x = c + self.rho * u - self.O2
+        dx = dc + self.rho * du
+        jx = np.stack([-x[..., 1], x[..., 0]], -1)
+        return rotate(dx - self.m21 * jx, -self.m21 * g)

@@ -1,0 +1,154 @@
+"""One working chamber in a transverse section, followed over its life.
+
+The chamber of the tooth space between pin -1 and pin 0 is born at ``phi_i`` when the
+inner tip first touches the conjugate fillet (the smallest contact time of the fillet,
+seed 000 section 2.2) and dies at ``phi_f = 2 pi (1 + 1/N1) - phi_i`` (Eq. 2).  In
+between it fills the whole space, except while the space passes the deep mesh, where
+fillet contacts split it; then the sub-regions alternate between the newborn and the
+dying chamber: a sub-region whose fillet points have already been touched by the inner
+tip belongs to the newborn chamber, the others to the dying one
+(:meth:`PinSpace.region_areas`).  This keeps both chamber areas continuous through every
+split and merge.
+
+Per unit length and unit pressure, each chamber section carries:
+
+* ``area``: A(psi);
+* ``dx, dy``: sum over its regions of (leading - trailing) contact point, fixed frame:
+  the outer-rotor force is ``p (dy, -dx)`` and the inner-rotor force its opposite
+  (seed 000 Eqs. 9, 11);
+* ``tq1, tq2``: torque *exerted by the fluid* on the outer rotor about O1 and on the
+  inner rotor about O2, ``-1/2 (|l|^2 - |t|^2)`` and ``+1/2 (|l-O2|^2 - |t-O2|^2)``
+  (Eqs. 10, 12 written with the chord midpoints).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .pin_gerotor import TWO_PI, PinGerotor
+from .pin_space import PinSpace
+
+#: Default angle samples per lobe period (2 pi / N1) of the section tables.
+POINTS_PER_PERIOD = 96
+
+
+@dataclass(frozen=True)
+class SectionChamber:
+    """Section tables of one chamber on a uniform grid of outer-rotor angle ``psi``."""
+
+    psi: np.ndarray
+    area: np.ndarray
+    dx: np.ndarray
+    dy: np.ndarray
+    tq1: np.ndarray
+    tq2: np.ndarray
+    trail: np.ndarray  # (n, 2) trailing contact (toward the younger chamber)
+    lead: np.ndarray  # (n, 2) leading contact (toward the older chamber)
+    perimeter_outer: np.ndarray  # outer-rotor arc length bounding the chamber
+    perimeter_inner: np.ndarray  # inner-rotor arc length bounding the chamber
+    phi_i: float
+    phi_f: float
+    lobes_outer: int
+    m21: float
+    centre_distance: float
+
+    @property
+    def area_max(self) -> float:
+        return float(self.area.max())
+
+
+def _torques(a, b, o2):
+    t1 = -0.5 * (np.sum(b * b, -1) - np.sum(a * a, -1))
+    t2 = 0.5 * (np.sum((b - o2) ** 2, -1) - np.sum((a - o2) ** 2, -1))
+    return t1, t2
+
+
+def section_chamber(pair: PinGerotor, points_per_period: int = POINTS_PER_PERIOD) -> SectionChamber:
+    """Tabulate the chamber of ``pair`` from birth to death."""
+    space = PinSpace(pair)
+    n1 = pair.lobes_outer
+    period = TWO_PI / n1
+    t_lo, t_hi = space.fillet_time_range
+    # Fillet -1 touches at fillet-0 times shifted by one period.
+    phi_i = math.remainder(t_lo + period, TWO_PI)
+    phi_j = phi_i + (t_hi - t_lo)  # end of the split phase after birth
+    phi_f = TWO_PI + period - phi_i
+    # The grid is aligned with the lobe period, so chambers one period apart share
+    # nodes and their loads cancel exactly at uniform pressure; it runs one node past
+    # the death, where the chamber is gone (zero).
+    step = period / points_per_period
+    n = int(math.ceil((phi_f - phi_i) / step * (1.0 - 1e-12))) + 1
+    psi = phi_i + step * np.arange(n)
+
+    area = np.empty(n)
+    trail = np.empty((n, 2))
+    lead = np.empty((n, 2))
+    dx = np.empty(n)
+    dy = np.empty(n)
+    tq1 = np.empty(n)
+    tq2 = np.empty(n)
+    o2 = pair.O2
+
+    dead = psi >= phi_f
+    whole = (psi > phi_j) & (psi < phi_f - (phi_j - phi_i))
+    perim_o = np.empty(n)
+    perim_i = np.empty(n)
+    a, t, lpt = space.whole_space(psi[whole])
+    perim_o[whole], perim_i[whole] = space.whole_space_perimeters(psi[whole])
+    area[whole], trail[whole], lead[whole] = a, t, lpt
+    d = lpt - t
+    dx[whole], dy[whole] = d[:, 0], d[:, 1]
+    tq1[whole], tq2[whole] = _torques(t, lpt, o2)
+
+    for i in np.nonzero(~whole & ~dead)[0]:
+        phi = psi[i]
+        cs, areas, touched = space.region_areas(phi)
+        birth = phi < phi_j + 1e-12
+        if len(cs) == 2:  # at the phase ends the split has just closed
+            keep = [0]
+        else:
+            keep = [k for k in range(len(areas)) if touched[k] == birth]
+        if not keep:  # the very instant of birth or death: a point
+            area[i] = dx[i] = dy[i] = tq1[i] = tq2[i] = perim_o[i] = perim_i[i] = 0.0
+            trail[i] = lead[i] = cs[1].point
+            continue
+        area[i] = areas[keep].sum()
+        per = np.array([space.perimeters(cs[k], cs[k + 1]) for k in keep]).sum(0)
+        perim_o[i], perim_i[i] = per
+        pa = np.array([cs[k].point for k in keep])
+        pb = np.array([cs[k + 1].point for k in keep])
+        d = (pb - pa).sum(0)
+        dx[i], dy[i] = d
+        t1, t2 = _torques(pa, pb, o2)
+        tq1[i], tq2[i] = t1.sum(), t2.sum()
+        trail[i], lead[i] = pa[0], pb[-1]
+    # The chamber is born and dies as a point: exact zeros at the ends (there the
+    # contact search may already see the neighbouring chamber's whole space).
+    ends = np.zeros(n, dtype=bool)
+    ends[0] = True
+    ends |= dead
+    for arr in (area, dx, dy, tq1, tq2, perim_o, perim_i):
+        arr[ends] = 0.0
+    trail[0] = lead[0] = 0.5 * (trail[0] + lead[0])
+    trail[dead] = trail[~dead][-1]
+    lead[dead] = lead[~dead][-1]
+    return SectionChamber(
+        psi=psi,
+        area=area,
+        dx=dx,
+        dy=dy,
+        tq1=tq1,
+        tq2=tq2,
+        trail=trail,
+        lead=lead,
+        perimeter_outer=perim_o,
+        perimeter_inner=perim_i,
+        phi_i=phi_i,
+        phi_f=phi_f,
+        lobes_outer=n1,
+        m21=pair.m21,
+        centre_distance=pair.E,
+    )

@@ -1,0 +1,101 @@
+"""Geometry figures of a case as one flat dictionary (the `rotorflow geometry` JSON)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .forces import power_split
+from .machine import InternalGearMachine
+from .table import ChamberTable
+
+
+def build_machine(case, points_per_period: int | None = None) -> InternalGearMachine:
+    from .section import POINTS_PER_PERIOD, section_chamber
+
+    ppp = points_per_period or POINTS_PER_PERIOD
+    life = None
+    if case.wrap is None:
+        sec = section_chamber(case.pair, ppp)
+        life = sec.phi_f - sec.phi_i
+    return InternalGearMachine(case.pair, case.sweep(life), ppp)
+
+
+def _deg(x):
+    return math.degrees(x)
+
+
+def geometry_figures(case, machine: InternalGearMachine | None = None) -> dict:
+    m = machine or build_machine(case)
+    pair, sec, cur = m.pair, m.section, m.curves
+    d = pair.diameter
+    n1 = pair.lobes_outer
+    split = power_split(m, case.volume_ratio, case.driven)
+    v_sw_bar = m.swept_volume / m.cylinder_volume
+    n_dr = pair.lobes_inner if split.driven == "inner" else n1
+    alpha = pair.pressure_angle
+    phi = cur.phi
+    k_max = int(np.argmax(cur.volume))
+    suction_close = phi[np.nonzero(cur.area_lp > 0.0)[0][-1]]
+    discharge_open = phi[np.nonzero(cur.area_hp > 0.0)[0][0]]
+    return {
+        "case": case.name,
+        "lobes_outer": n1,
+        "lobes_inner": pair.lobes_inner,
+        "m21": pair.m21,
+        "lambda": pair.lam,
+        "sigma": pair.sigma,
+        "sigma_lim": pair.sigma_lim,
+        "sigma_bar": pair.sigma / pair.sigma_lim,
+        "E_over_D": pair.E / d,
+        "a_over_D": pair.a / d,
+        "rho_over_D": pair.rho / d,
+        "pressure_angle_deg": None if alpha is None else _deg(alpha),
+        "pitch_point_contact": alpha is not None,
+        "phi_i_deg": _deg(sec.phi_i),
+        "phi_f_deg": _deg(sec.phi_f),
+        "wrap_outer_deg": _deg(m.sweep.wrap),
+        "wrap_inner_deg": _deg(m.sweep.wrap * pair.m21),
+        "wrap_bar": m.wrap_bar,
+        "pitch_over_length": None if m.pitch_length is None else m.pitch_length / m.sweep.length,
+        "A_wc_bar_max": 4.0 * sec.area_max / (math.pi * d * d),
+        "V_sw_bar": v_sw_bar,
+        "V_dr_bar": v_sw_bar * n_dr / n1,
+        "driven": split.driven,
+        "Pi_max": split.pi_max,
+        "power_balance_error": split.power_balance_error,
+        "chamber_volume_max_m3": m.volume_max,
+        "swept_volume_m3": m.swept_volume,
+        "angle_volume_max_deg": _deg(phi[k_max] - phi[0]),
+        "angle_suction_close_deg": _deg(suction_close - phi[0]),
+        "angle_discharge_open_deg": _deg(discharge_open - phi[0]),
+        "volume_suction_close_m3": float(np.interp(suction_close, phi, cur.volume)),
+        "chamber_life_deg": _deg(phi[-1] - phi[0]),
+        "volume_ratio": case.volume_ratio,
+    }
+
+
+def chamber_table(case, machine: InternalGearMachine | None = None) -> ChamberTable:
+    """The chamber table the quasi-1D model reads (see :mod:`.table`)."""
+    m = machine or build_machine(case)
+    cur = m.curves
+    pair = m.pair
+    ratio = {"inner": pair.lobes_inner / pair.lobes_outer, "outer": 1.0}
+    driven = case.driven if case.driven != "auto" else power_split(m, case.volume_ratio).driven
+    return ChamberTable(
+        angle_rad=cur.phi - cur.phi[0],
+        volume_m3=cur.volume,
+        dVdangle_m3_rad=cur.dvolume,
+        area_lp_m2=cur.area_lp,
+        area_hp_m2=cur.area_hp,
+        seal_next_m=cur.seal_lead,
+        seal_prev_m=cur.seal_trail,
+        seal_lp_face_m=cur.perimeter_lp,
+        seal_hp_face_m=cur.perimeter_hp,
+        lobes_outer=pair.lobes_outer,
+        # outer-rotor speed = driven speed x (N_driven / N1)... inner turns m21 times faster
+        speed_ratio_outer_per_driven=ratio[driven],
+        length_m=m.sweep.length,
+        diameter_m=pair.diameter,
+    )

@@ -1,0 +1,19 @@
+"""Quasi-1D chamber model: mass and energy of every working chamber, coupled by leakage
+and ports, integrated to the machine's periodic state.
+
+    from rotorflow.quasi1d import simulate, Operating, Leakage, Ports, Numerics
+    result = simulate(table, Operating.from_section(case["operating"], "case.toml"),
+                      Leakage.from_section(case.get("leakage", {}), "case.toml"),
+                      Ports.from_section(case.get("ports", {}), "case.toml"))
+    result.summary()               # figures as a JSON-ready dict
+    result.write_traces(folder)    # chamber_cycle.csv, chambers.csv
+    result.plot(folder)            # p-angle and p-V PNGs
+"""
+
+from .integrate import IntegrationError
+from .result import SimulationResult, plot_cycle
+from .settings import Leakage, Numerics, Operating, Ports
+from .simulate import simulate
+
+__all__ = ["IntegrationError", "Leakage", "Numerics", "Operating", "Ports", "SimulationResult",
+           "plot_cycle", "simulate"]

@@ -1,0 +1,22 @@
+"""Shared fixtures; the report header names the versions a failing run depends on."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy
+
+REPO = Path(__file__).resolve().parents[1]
+CASES = REPO / "cases"
+REFERENCE = REPO.parent / "shared" / "reference"
+
+
+def pytest_report_header(config):
+    return [f"numpy {np.__version__}, scipy {scipy.__version__}"]
+
+
+@pytest.fixture(scope="session")
+def repo() -> Path:
+    return REPO

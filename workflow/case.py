@@ -1,0 +1,220 @@
+"""The case file: TOML in, validated frozen settings out.
+
+Keys carry their unit in their name; everything returned is SI.  Unknown sections and
+keys are errors naming the key and the file, never ignored.  Sections owned by later
+stages ([leakage], [ports], ...) are validated by those stages' own settings classes.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from rotorflow.errors import CaseError
+from rotorflow.geometry.pin_gerotor import PinGerotor, sigma_limit
+from rotorflow.geometry.sweep import Sweep
+
+MACHINE_KEYS = {
+    "type",
+    "lobes_outer",
+    "lambda",
+    "sigma",
+    "sigma_bar",
+    "diameter_mm",
+    "length_mm",
+}
+SWEEP_KEYS = {"kind", "wrap_outer_deg", "wrap_bar", "diameter_end_mm", "lead_ratio"}
+#: [operating] keys the geometry reads; the quasi-1D stage owns the others.
+OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven"}
+SECTIONS = {"machine", "sweep", "operating", "leakage", "ports", "numerics", "export", "outputs"}
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    path: Path
+    pair: PinGerotor
+    sweep_kind: str
+    length: float
+    wrap: float | None  # outer wrap [rad], or None when given as wrap_bar
+    wrap_bar: float | None
+    scale_end: float
+    lead_ratio: float
+    volume_ratio: float
+    driven: str
+    raw: dict = field(repr=False, compare=False)
+
+    def sweep(self, life_2d: float) -> Sweep:
+        """The sweep law; a wrap given as wrap_bar needs the profile's chamber life."""
+        wrap = self.wrap if self.wrap is not None else self.wrap_bar * life_2d
+        return Sweep(self.sweep_kind, self.length, wrap, self.scale_end, self.lead_ratio)
+
+
+def _number(section: dict, key: str, where: str, *, integer: bool = False):
+    value = section[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise CaseError(f"'{key}' in {where} must be a number, got {value!r}")
+    if integer and not float(value).is_integer():
+        raise CaseError(f"'{key}' in {where} must be an integer, got {value!r}")
+    if not math.isfinite(value):
+        raise CaseError(f"'{key}' in {where} must be finite, got {value!r}")
+    return int(value) if integer else float(value)
+
+
+def _check_keys(section: dict, allowed: set[str], name: str, path: Path):
+    if not isinstance(section, dict):
+        raise CaseError(f"[{name}] in {path} must be a table")
+    for key in section:
+        if key not in allowed:
+            raise CaseError(f"unknown key '{key}' in [{name}] of {path}")
+
+
+def load_toml(path: Path) -> dict:
+    path = Path(path)
+    if not path.is_file():
+        raise CaseError(f"case file not found: {path}")
+    try:
+        return tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise CaseError(f"malformed case file {path}: {exc}") from None
+
+
+def load_case(path: Path) -> Case:
+    path = Path(path)
+    data = load_toml(path)
+    for name in data:
+        if name not in SECTIONS:
+            raise CaseError(f"unknown section [{name}] in {path}")
+    if "machine" not in data:
+        raise CaseError(f"missing section [machine] in {path}")
+    m = data["machine"]
+    _check_keys(m, MACHINE_KEYS, "machine", path)
+    where = f"[machine] of {path}"
+    for key in ("type", "lobes_outer", "lambda", "diameter_mm", "length_mm"):
+        if key not in m:
+            raise CaseError(f"missing key '{key}' in {where}")
+    if m["type"] != "internal-gear":
+        raise CaseError(f"unsupported machine type '{m['type']}' in {where} (internal-gear)")
+    n1 = _number(m, "lobes_outer", where, integer=True)
+    if n1 < 2:
+        raise CaseError(f"lobes_outer must be at least 2 in {where}, got {n1}")
+    lam = _number(m, "lambda", where)
+    if not lam > 1.0:
+        raise CaseError(f"lambda must be greater than 1 in {where}, got {lam}")
+    diameter = _number(m, "diameter_mm", where) * 1e-3
+    length = _number(m, "length_mm", where) * 1e-3
+    if not diameter > 0.0:
+        raise CaseError(f"diameter_mm must be positive in {where}")
+    if not length > 0.0:
+        raise CaseError(f"length_mm must be positive in {where}")
+    if ("sigma" in m) == ("sigma_bar" in m):
+        raise CaseError(f"give exactly one of 'sigma' or 'sigma_bar' in {where}")
+    lim = sigma_limit(n1, lam)
+    if "sigma" in m:
+        sigma = _number(m, "sigma", where)
+    else:
+        sigma_bar = _number(m, "sigma_bar", where)
+        if not 0.0 < sigma_bar <= 1.0:
+            raise CaseError(f"sigma_bar must lie in (0, 1] in {where}, got {sigma_bar}")
+        sigma = sigma_bar * lim
+    if not sigma > 0.0:
+        raise CaseError(f"sigma must be positive in {where}, got {sigma}")
+    if sigma > lim * (1.0 + 1e-9):
+        raise CaseError(
+            f"sigma = {sigma:.6g} is above the undercut limit sigma_lim = {lim:.6g} in {where}"
+        )
+    pair = PinGerotor(n1, lam, min(sigma, lim), diameter)
+
+    s = data.get("sweep", {"kind": "straight"})
+    _check_keys(s, SWEEP_KEYS, "sweep", path)
+    where = f"[sweep] of {path}"
+    kind = s.get("kind", "straight")
+    if kind not in ("straight", "helical", "conical"):
+        raise CaseError(f"unknown sweep kind '{kind}' in {where} (straight, helical, conical)")
+    wrap = wrap_bar = None
+    if kind == "straight":
+        if "wrap_outer_deg" in s or "wrap_bar" in s:
+            raise CaseError(f"a straight sweep takes no wrap in {where}")
+        wrap = 0.0
+    else:
+        if ("wrap_outer_deg" in s) == ("wrap_bar" in s):
+            raise CaseError(f"give exactly one of 'wrap_outer_deg' or 'wrap_bar' in {where}")
+        if "wrap_outer_deg" in s:
+            wrap = math.radians(_number(s, "wrap_outer_deg", where))
+            if wrap < 0.0:
+                raise CaseError(f"wrap_outer_deg must not be negative in {where}")
+        else:
+            wrap_bar = _number(s, "wrap_bar", where)
+            if wrap_bar < 0.0:
+                raise CaseError(f"wrap_bar must not be negative in {where}")
+    scale_end, lead_ratio = 1.0, 1.0
+    if kind == "conical":
+        if "diameter_end_mm" not in s:
+            raise CaseError(f"missing key 'diameter_end_mm' in {where} (conical sweep)")
+        scale_end = _number(s, "diameter_end_mm", where) * 1e-3 / diameter
+        if not 0.0 < scale_end <= 1.0:
+            raise CaseError(f"diameter_end_mm must lie in (0, diameter_mm] in {where}")
+        lead_ratio = _number(s, "lead_ratio", where) if "lead_ratio" in s else 1.0
+        if not lead_ratio > 0.0:
+            raise CaseError(f"lead_ratio must be positive in {where}")
+    elif "diameter_end_mm" in s or "lead_ratio" in s:
+        raise CaseError(f"diameter_end_mm and lead_ratio belong to a conical sweep in {where}")
+
+    op = data.get("operating", {})
+    if not isinstance(op, dict):
+        raise CaseError(f"[operating] in {path} must be a table")
+    where = f"[operating] of {path}"
+    volume_ratio = _number(op, "volume_ratio", where) if "volume_ratio" in op else 2.0
+    if not volume_ratio > 1.0:
+        raise CaseError(f"volume_ratio must be greater than 1 in {where}, got {volume_ratio}")
+    driven = op.get("driven", "auto")
+    if driven not in ("inner", "outer", "auto"):
+        raise CaseError(f"driven must be 'inner', 'outer' or 'auto' in {where}, got {driven!r}")
+    validate_stage_sections(data, path)
+    return Case(
+        name=path.stem,
+        path=path,
+        pair=pair,
+        sweep_kind=kind,
+        length=length,
+        wrap=wrap,
+        wrap_bar=wrap_bar,
+        scale_end=scale_end,
+        lead_ratio=lead_ratio,
+        volume_ratio=volume_ratio,
+        driven=driven,
+        raw=data,
+    )
+
+
+def validate_stage_sections(data: dict, path: Path) -> None:
+    """Hand the sections of later stages to their owners' validators.
+
+    [operating] keys other than the geometry's go to the quasi-1D settings; until a
+    stage that owns a section exists, any key in it is reported as unknown.
+    """
+    op_extra = {k: v for k, v in data.get("operating", {}).items()}
+    owned = {"operating": op_extra}
+    for name in ("leakage", "ports", "numerics"):
+        if name in data:
+            owned[name] = data[name]
+    try:
+        from rotorflow.quasi1d import settings as q1d
+    except ImportError:
+        q1d = None
+    for name, section in owned.items():
+        if not isinstance(section, dict):
+            raise CaseError(f"[{name}] in {path} must be a table")
+        if name == "operating" and set(section) <= OPERATING_GEOMETRY_KEYS:
+            continue  # a geometry-only case: the quasi-1D keys are not needed
+        validator = getattr(q1d, name.capitalize(), None) if q1d else None
+        if validator is not None and hasattr(validator, "from_section"):
+            validator.from_section(section, str(path))
+            continue
+        allowed = OPERATING_GEOMETRY_KEYS if name == "operating" else set()
+        _check_keys(section, allowed, name, path)
+    for name in ("export", "outputs"):
+        if name in data:
+            raise CaseError(f"section [{name}] in {path} needs a stage this version lacks")

@@ -10,7 +10,7 @@ import scipy
 
 REPO = Path(__file__).resolve().parents[1]
 CASES = REPO / "cases"
-REFERENCE = REPO.parent / "shared" / "reference"
+REFERENCE = REPO / "tests" / "data" / "reference"
 
 
 def pytest_report_header(config):

@@ -1,0 +1,30 @@
+"""`make bench`: every stage's run-time-vs-error benchmark into bench/results/."""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import sys
+from pathlib import Path
+
+RESULTS = Path(__file__).resolve().parent / "results"
+MODULES = ("bench.bench_geometry", "bench.bench_quasi1d", "bench.bench_cfd")
+
+
+def main() -> int:
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    log = logging.getLogger("bench")
+    for name in MODULES:
+        try:
+            mod = importlib.import_module(name)
+        except ModuleNotFoundError:
+            log.info("%s: not present, skipped", name)
+            continue
+        rows = mod.run(RESULTS)
+        for row in rows or []:
+            log.info("%s %s", name, row)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

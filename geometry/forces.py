@@ -103,7 +103,9 @@ def power_split(
     p_in = shaft1 + m21 * shaft2
     r1 = shaft1 / p_in
     r2 = m21 * shaft2 / p_in
-    w = cycle_work(machine.volume_max, eps_v, p_suction, gamma)
+    # Eq. 18 with the cycle work of the chamber's own p-V loop; for a conjugate pair
+    # (no clearance volume) it equals the closed form of Eq. 17 (see tests).
+    w = -float(np.trapezoid((p - p_suction) * c.dvolume, c.phi))
     cycle = w * machine.pair.lobes_outer / (2.0 * math.pi)
     if driven == "auto":
         driven = "outer" if r1.max() > r2.max() else "inner"

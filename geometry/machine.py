@@ -64,9 +64,11 @@ def _linear(section: SectionChamber, values: np.ndarray, x):
     t = (np.asarray(x) - psi[0]) / h
     i = np.floor(t).astype(int)
     f = t - i
-    ok = (i >= 0) & (i < len(psi) - 1)
-    i = np.clip(i, 0, len(psi) - 2)
-    out = values[i] * (1.0 - f) + values[i + 1] * f
+    # One virtual zero node either side: the chamber does not exist there.
+    padded = np.concatenate([[0.0], values, [0.0]])
+    ok = (i >= -1) & (i < len(psi))
+    j = np.clip(i + 1, 0, len(padded) - 2)
+    out = padded[j] * (1.0 - f) + padded[j + 1] * f
     return np.where(ok, out, 0.0)
 
 
@@ -112,8 +114,17 @@ class InternalGearMachine:
         psi = phi[:, None] - sw.twist(z)[None, :]
         a_spl = _extend(sec, sec.area)
         w2 = wz * s * s
-        volume = _eval(a_spl, psi) @ w2
-        dvolume = _eval(a_spl, psi, 1) @ w2
+        if sec.area[0] == 0.0:  # conjugate: the area is smooth and vanishes at birth
+            volume = _eval(a_spl, psi) @ w2
+            dvolume = _eval(a_spl, psi, 1) @ w2
+        else:
+            # A non-conjugate chamber is handed over with a finite area (clearance
+            # volume), a jump that a spline would ring on; interpolate linearly.
+            volume = _linear(sec, sec.area, psi) @ w2
+            alive = sec.psi < sec.phi_f
+            d_area = np.zeros_like(sec.area)
+            d_area[alive] = np.gradient(sec.area[alive], sec.psi[alive])
+            dvolume = _linear(sec, d_area, psi) @ w2
         fx = _linear(sec, sec.dy, psi) @ (wz * s)
         fy = -(_linear(sec, sec.dx, psi) @ (wz * s))
         t1 = _linear(sec, sec.tq1, psi) @ w2

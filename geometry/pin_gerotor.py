@@ -106,6 +106,10 @@ class PinGerotor:
     lam: float
     sigma: float
     diameter: float
+    #: "conjugate" (zero smallest chamber) or "arc": a circular arc between the pin
+    #: edges through an apex on the fillet's mid-line at ``fillet_apex_diameter / 2``.
+    fillet_kind: str = "conjugate"
+    fillet_apex_diameter: float | None = None
 
     def __post_init__(self):
         if self.lobes_outer < 2:
@@ -124,6 +128,10 @@ class PinGerotor:
                 f"sigma = {self.sigma:.6g} is above the undercut limit sigma_lim = {lim:.6g} "
                 f"for N1={self.lobes_outer}, lambda={self.lam:g} (seed 000 Eq. 4)"
             )
+        if self.fillet_kind not in ("conjugate", "arc"):
+            raise CaseError(f"unknown fillet '{self.fillet_kind}' (conjugate or arc)")
+        if self.fillet_kind == "arc":
+            self._check_arc_fillet()
 
     # ---------------------------------------------------------------- dimensions (Eq. 1)
     @cached_property
@@ -283,3 +291,48 @@ class PinGerotor:
         dx = dc + self.rho * du
         jx = np.stack([-x[..., 1], x[..., 0]], -1)
         return rotate(dx - self.m21 * jx, -self.m21 * g)
+
+    # ---------------------------------------------------------------- arc fillet
+    @cached_property
+    def arc_fillet(self) -> tuple[np.ndarray, float, float, float]:
+        """Circle (centre, radius) and end angles about it of the arc fillet 0, ccw."""
+        j0 = self.pin_point(0, -self.pin_edge)
+        j1 = self.pin_point(1, self.pin_edge)
+        mid = math.pi / 2.0 + math.pi / self.lobes_outer
+        apex_r = 0.5 * (self.fillet_apex_diameter or self.diameter)
+        apex = apex_r * np.array([math.cos(mid), math.sin(mid)])
+        # Circle through three points: the centre is on the mid-line (symmetry).
+        u = np.array([math.cos(mid), math.sin(mid)])
+        # |c - apex| = |c - j0| with c = t u: solve for t.
+        t = (apex @ apex - j0 @ j0) / (2.0 * (apex - j0) @ u)
+        centre = t * u
+        radius = float(np.linalg.norm(apex - centre))
+        a0 = math.atan2(*(j0 - centre)[::-1])
+        a1 = math.atan2(*(j1 - centre)[::-1])
+        a_apex = math.atan2(*(apex - centre)[::-1])
+        # Go from j0 to j1 the way that passes through the apex.
+        span = (a1 - a0) % TWO_PI
+        if (a_apex - a0) % TWO_PI > span:
+            span -= TWO_PI
+        return centre, radius, a0, a0 + span
+
+    def _check_arc_fillet(self):
+        apex_d = self.fillet_apex_diameter or self.diameter
+        if apex_d < self.diameter * (1.0 - 1e-12):
+            raise CaseError(
+                f"fillet apex diameter {apex_d:.6g} m is inside the conjugate fillet "
+                f"(smallest allowed: D = {self.diameter:.6g} m)"
+            )
+        centre, radius, _, _ = self.arc_fillet
+        conj = PinGerotor(self.lobes_outer, self.lam, self.sigma, self.diameter)
+        g_lo, g_hi = conj.fillet_range
+        _, pts = conj.fillet(np.linspace(g_lo, g_hi, 401))
+        # The fluid side of the arc is inside its circle; a conjugate-fillet point
+        # outside it would be cut by the arc: the rotors would interfere.
+        depth = np.linalg.norm(pts - centre, axis=-1) - radius
+        worst = float(depth.max())
+        if worst > 1e-9 * self.diameter:
+            raise CaseError(
+                f"the arc fillet infringes the conjugate fillet by {worst * 1e6:.3g} um: "
+                "raise fillet_apex_diameter_mm"
+            )

@@ -137,7 +137,20 @@ class PinSpace:
 
     @cached_property
     def fillet_full_integral(self) -> float:
+        """1/2 \\int x x dx along the whole fillet 0, counter-clockwise (S1)."""
+        if self.pair.fillet_kind == "arc":
+            c, r, a0, a1 = self.pair.arc_fillet
+            e0 = np.array([math.cos(a0), math.sin(a0)])
+            e1 = np.array([math.cos(a1), math.sin(a1)])
+            return float(0.5 * (r * r * (a1 - a0) + r * cross(c, e1 - e0)))
         return float(self.fillet_integral(self._fillet_fit["g_lo"]))
+
+    @cached_property
+    def fillet_length(self) -> float:
+        if self.pair.fillet_kind == "arc":
+            _, r, a0, a1 = self.pair.arc_fillet
+            return float(r * abs(a1 - a0))
+        return float(self._fillet_arc_table[1][-1])
 
     @cached_property
     def _bracket(self):
@@ -214,9 +227,10 @@ class PinSpace:
         th_m = float(self.pin_theta(-1, phi1))
         g_m = phi1 - TWO_PI / n1 + TWO_PI
         out.append(Contact("pin", self._to_fixed(p.pin_point(-1, th_m), phi1), th_m, g_m))
-        t_lo, t_hi = self.fillet_time_range
-        t = self.fillet_instant(phi1)
-        if t_lo - 1e-12 <= t <= t_hi + 1e-12:
+        conjugate = p.fillet_kind == "conjugate"
+        t_lo, t_hi = self.fillet_time_range if conjugate else (0.0, -1.0)
+        t = self.fillet_instant(phi1) if conjugate else 0.0
+        if conjugate and t_lo - 1e-12 <= t <= t_hi + 1e-12:
             g0 = phi1  # inner parameter touching pin 0
             for gc in self.fillet_contacts(t):
                 j = math.ceil((g0 - gc) / TWO_PI - 1e-12)
@@ -243,7 +257,10 @@ class PinSpace:
         else:
             g_start = a.psi1
         g_end = b.psi1 if b.kind == "fillet" else g_lo
-        total += self.fillet_integral(g_end) - self.fillet_integral(g_start)
+        if p.fillet_kind == "arc":  # never touched, so always crossed whole
+            total += self.fillet_full_integral
+        else:
+            total += self.fillet_integral(g_end) - self.fillet_integral(g_start)
         if b.kind == "pin":
             total += self.pin_arc_integral(0, e, b.psi1)
         return float(total)
@@ -347,7 +364,10 @@ class PinSpace:
             outer += p.rho * abs(a.psi1 + e)
         if b.kind == "pin":
             outer += p.rho * abs(e - b.psi1)
-        outer += abs(float(self.fillet_arc(g_start) - self.fillet_arc(g_end)))
+        if p.fillet_kind == "arc":
+            outer += self.fillet_length
+        else:
+            outer += abs(float(self.fillet_arc(g_start) - self.fillet_arc(g_end)))
         inner = abs(float(self.inner_arc(a.g2) - self.inner_arc(b.g2)))
         return outer, inner
 
@@ -357,8 +377,7 @@ class PinSpace:
         phi1 = np.asarray(phi1, dtype=float)
         e = p.pin_edge
         th_m, th_0 = self.pin_theta(-1, phi1), self.pin_theta(0, phi1)
-        fillet = float(self._fillet_arc_table[1][-1])
-        outer = p.rho * (np.abs(th_m + e) + np.abs(e - th_0)) + fillet
+        outer = p.rho * (np.abs(th_m + e) + np.abs(e - th_0)) + self.fillet_length
         g_m = phi1 + TWO_PI * (p.lobes_outer - 1) / p.lobes_outer
         inner = np.abs(self.inner_arc(g_m) - self.inner_arc(phi1))
         return outer, inner

@@ -71,11 +71,18 @@ def section_chamber(pair: PinGerotor, points_per_period: int = POINTS_PER_PERIOD
     space = PinSpace(pair)
     n1 = pair.lobes_outer
     period = TWO_PI / n1
-    t_lo, t_hi = space.fillet_time_range
-    # Fillet -1 touches at fillet-0 times shifted by one period.
-    phi_i = math.remainder(t_lo + period, TWO_PI)
-    phi_j = phi_i + (t_hi - t_lo)  # end of the split phase after birth
-    phi_f = TWO_PI + period - phi_i
+    if pair.fillet_kind == "conjugate":
+        t_lo, t_hi = space.fillet_time_range
+        # Fillet -1 touches at fillet-0 times shifted by one period.
+        phi_i = math.remainder(t_lo + period, TWO_PI)
+        phi_j = phi_i + (t_hi - t_lo)  # end of the split phase after birth
+        phi_f = TWO_PI + period - phi_i
+    else:
+        # No fillet contact: the space is never split and its smallest area (not zero:
+        # a clearance volume) comes when it straddles the deep mesh, at phi = pi / N1.
+        phi_i = math.pi / n1
+        phi_j = phi_i - 1.0  # no split phase
+        phi_f = phi_i + TWO_PI
     # The grid is aligned with the lobe period, so chambers one period apart share
     # nodes and their loads cancel exactly at uniform pressure; it runs one node past
     # the death, where the chamber is gone (zero).
@@ -93,7 +100,7 @@ def section_chamber(pair: PinGerotor, points_per_period: int = POINTS_PER_PERIOD
     o2 = pair.O2
 
     dead = psi >= phi_f
-    whole = (psi > phi_j) & (psi < phi_f - (phi_j - phi_i))
+    whole = ((psi > phi_j) & (psi < phi_f - (phi_j - phi_i))) | (phi_j < phi_i)
     perim_o = np.empty(n)
     perim_i = np.empty(n)
     a, t, lpt = space.whole_space(psi[whole])
@@ -128,11 +135,12 @@ def section_chamber(pair: PinGerotor, points_per_period: int = POINTS_PER_PERIOD
     # The chamber is born and dies as a point: exact zeros at the ends (there the
     # contact search may already see the neighbouring chamber's whole space).
     ends = np.zeros(n, dtype=bool)
-    ends[0] = True
+    ends[0] = pair.fillet_kind == "conjugate"
     ends |= dead
     for arr in (area, dx, dy, tq1, tq2, perim_o, perim_i):
         arr[ends] = 0.0
-    trail[0] = lead[0] = 0.5 * (trail[0] + lead[0])
+    if ends[0]:
+        trail[0] = lead[0] = 0.5 * (trail[0] + lead[0])
     trail[dead] = trail[~dead][-1]
     lead[dead] = lead[~dead][-1]
     return SectionChamber(

@@ -88,3 +88,14 @@ def test_volume_curve_converges_with_points():
     order = -np.polyfit(np.log(ns), np.log(errs), 1)[0]
     assert errs[-1] < 1e-4
     assert order > 2.0
+
+
+@pytest.mark.parametrize("sweep", [Sweep("straight", L), Sweep("helical", L, 2.4)])
+def test_power_balance_with_a_clearance_volume(sweep):
+    # A non-conjugate (arc) fillet hands a chamber over with a finite area; the shaft
+    # power must still equal the p dV work of the chamber loop (Eq. 18).
+    from rotorflow.geometry.forces import power_split
+
+    arc = PinGerotor(5, 1.3, sigma_limit(5, 1.3), 0.1, "arc", 0.11)
+    split = power_split(machine(sweep, pair=arc), 3.0)
+    assert split.power_balance_error < 1e-4

@@ -93,3 +93,26 @@ def test_region_areas_sum_to_annulus(pair):
 def test_bad_profiles_raise_case_error(kwargs, message):
     with pytest.raises(CaseError, match=message):
         PinGerotor(**kwargs)
+
+
+def test_arc_fillet_must_not_infringe_the_conjugate_one(pair):
+    with pytest.raises(CaseError, match="infringes"):
+        PinGerotor(6, pair.lam, pair.sigma, 1.0, "arc", 1.02)
+    with pytest.raises(CaseError, match="apex"):
+        PinGerotor(6, pair.lam, pair.sigma, 1.0, "arc", 0.9)
+
+
+def test_arc_fillet_leaves_a_clearance_area_and_still_tiles(pair):
+    arc = PinGerotor(6, pair.lam, pair.sigma, 1.0, "arc", 1.1)
+    sp, sc = PinSpace(arc), PinSpace(pair)
+    # The arc lies outside the conjugate fillet, so every space grows by the same area:
+    # the lens between the two fillets.
+    lens = sp.fillet_full_integral - sc.fillet_full_integral
+    assert lens > 0
+    for phi in (0.2, 0.9):
+        a_arc = sp.whole_space(np.array([phi]))[0][0]
+        a_con = sc.whole_space(np.array([phi]))[0][0]
+        assert a_arc - a_con == pytest.approx(lens, rel=1e-12)
+    # At the deep mesh the conjugate space is (nearly) closed; the arc one keeps the lens.
+    deep = sp.whole_space(np.array([math.pi / 6]))[0][0]
+    assert deep > 0.9 * lens

@@ -24,6 +24,8 @@ MACHINE_KEYS = {
     "sigma_bar",
     "diameter_mm",
     "length_mm",
+    "fillet",
+    "fillet_apex_diameter_mm",
 }
 SWEEP_KEYS = {"kind", "wrap_outer_deg", "wrap_bar", "diameter_end_mm", "lead_ratio"}
 #: [operating] keys the geometry reads; the quasi-1D stage owns the others.
@@ -125,7 +127,15 @@ def load_case(path: Path) -> Case:
         raise CaseError(
             f"sigma = {sigma:.6g} is above the undercut limit sigma_lim = {lim:.6g} in {where}"
         )
-    pair = PinGerotor(n1, lam, min(sigma, lim), diameter)
+    fillet = m.get("fillet", "conjugate")
+    if fillet not in ("conjugate", "arc"):
+        raise CaseError(f"fillet must be 'conjugate' or 'arc' in {where}, got {fillet!r}")
+    apex = None
+    if "fillet_apex_diameter_mm" in m:
+        if fillet != "arc":
+            raise CaseError(f"fillet_apex_diameter_mm needs fillet = 'arc' in {where}")
+        apex = _number(m, "fillet_apex_diameter_mm", where) * 1e-3
+    pair = PinGerotor(n1, lam, min(sigma, lim), diameter, fillet, apex)
 
     s = data.get("sweep", {"kind": "straight"})
     _check_keys(s, SWEEP_KEYS, "sweep", path)

@@ -68,3 +68,16 @@ def test_wrap_bar_eq8(result):
     assert fig["phi_f_deg"] == pytest.approx(360 * (1 + 1 / n1) - fig["phi_i_deg"], abs=1e-9)
     assert fig["phi_i_deg"] < 180 / n1
     assert math.isfinite(fig["Pi_max"])
+
+
+@pytest.mark.parametrize("row", ROWS, ids=[r["case"] for r in ROWS])
+def test_cycle_work_equals_eq17_closed_form(row):
+    from rotorflow.geometry.forces import cycle_work, power_split
+    from rotorflow.geometry.summary import build_machine
+
+    case = load_case(CASES / f"table1_{row['case']}.toml")
+    m = build_machine(case)
+    split = power_split(m, case.volume_ratio, case.driven)
+    eq17 = cycle_work(m.volume_max, case.volume_ratio, 1.0e5)
+    per_cycle = split.cycle_power_per_omega1 * 2 * math.pi / m.pair.lobes_outer
+    assert per_cycle == pytest.approx(eq17, rel=1e-4)

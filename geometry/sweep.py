@@ -76,8 +76,9 @@ class Sweep:
             return np.full_like(zeta, self.wrap / self.length)
         return self.wrap * (r - 1.0) / (math.log(r) * (1.0 + (r - 1.0) * zeta)) / self.length
 
-    def nodes(self, panels: int = PANELS, order: int = GAUSS_NODES):
+    def nodes(self, panels: int | None = None, order: int = GAUSS_NODES):
         """Gauss-Legendre nodes and weights over [0, L]."""
+        panels = panels or PANELS
         x, w = np.polynomial.legendre.leggauss(order)
         edges = np.linspace(0.0, self.length, panels + 1)
         h = np.diff(edges)

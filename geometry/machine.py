@@ -131,6 +131,9 @@ class InternalGearMachine:
         t2 = _linear(sec, sec.tq2, psi) @ w2
         area_lp = _eval(a_spl, phi) * float(sw.scale(0.0)) ** 2
         area_hp = _eval(a_spl, phi - sw.wrap) * float(sw.scale(sw.length)) ** 2
+        # The spline may undershoot by ~1e-10 of the maximum where the area rises from
+        # zero like the fourth power of the angle; areas and volumes cannot be negative.
+        volume, area_lp, area_hp = (np.maximum(x, 0.0) for x in (volume, area_lp, area_hp))
         seal_lead, seal_trail = self._seal_lengths(phi, z, wz, s)
         per = _extend(sec, sec.perimeter_outer + sec.perimeter_inner)
         return ChamberCurves(

@@ -30,9 +30,9 @@ venv: $(STAMP) ## create .venv and install rotorflow with its Python dependencie
 demo: $(STAMP) ## set up, then run the built-in default case
 	$(VENV)/bin/rotorflow geometry $(CASE)
 	$(VENV)/bin/rotorflow table $(CASE) --out build/$(basename $(notdir $(CASE)))/chamber_table.csv
+	$(VENV)/bin/rotorflow simulate $(CASE) --traces build/$(basename $(notdir $(CASE)))/quasi1d
 
-case: $(STAMP) ## run one case: make case CASE=path/to/case.toml
-	$(VENV)/bin/rotorflow geometry $(CASE) --json
+case: demo ## run one case: make case CASE=path/to/case.toml
 
 test: $(STAMP) ## set up, then run the tests (all tiers but slow)
 	$(PY) -m pytest -m "not slow" $(PYTEST_ARGS)

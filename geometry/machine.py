@@ -147,8 +147,8 @@ class InternalGearMachine:
             torque2=t2,
             seal_lead=seal_lead,
             seal_trail=seal_trail,
-            perimeter_lp=_eval(per, phi),
-            perimeter_hp=_eval(per, phi - sw.wrap) * float(sw.scale(sw.length)),
+            perimeter_lp=np.maximum(_eval(per, phi), 0.0),
+            perimeter_hp=np.maximum(_eval(per, phi - sw.wrap), 0.0) * float(sw.scale(sw.length)),
             step=step,
         )
 

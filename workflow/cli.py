@@ -64,6 +64,42 @@ def cmd_table(args) -> int:
     return 0
 
 
+def cmd_simulate(args) -> int:
+    from rotorflow.geometry.summary import chamber_table
+    from rotorflow.quasi1d import Leakage, Numerics, Operating, Ports, simulate
+    from rotorflow.workflow.case import load_case
+
+    case = load_case(args.case)
+    raw, where = case.raw, str(args.case)
+    if "p_suction_bar" not in raw.get("operating", {}):
+        raise CaseError(f"[operating] of {where} needs p_suction_bar (and the rest of the "
+                        "operating point) to simulate")
+    operating = Operating.from_section(raw["operating"], where)
+    leakage = Leakage.from_section(raw.get("leakage", {}), where)
+    ports = Ports.from_section(raw.get("ports", {}), where)
+    numerics = Numerics.from_section(raw.get("numerics", {}), where)
+    result = simulate(chamber_table(case), operating, leakage, ports, numerics)
+    if args.traces:
+        out = Path(args.traces)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=".traces-", dir=out.parent))
+        try:
+            result.write_traces(tmp)
+            result.plot(tmp)
+            if out.exists():
+                shutil.rmtree(out)
+            os.replace(tmp, out)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+    figures = result.summary()
+    if args.json:
+        print(json.dumps(_finite(figures), indent=2))
+    else:
+        for key, value in figures.items():
+            print(f"{key:<32} {value:.6g}" if isinstance(value, float) else f"{key:<32} {value}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rotorflow", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"rotorflow {__version__}")
@@ -76,6 +112,11 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("case", type=Path)
     t.add_argument("--out", type=Path, required=True, help="path of the CSV to write")
     t.set_defaults(func=cmd_table)
+    q = sub.add_parser("simulate", help="quasi-1D model of the case's operating point")
+    q.add_argument("case", type=Path)
+    q.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    q.add_argument("--traces", type=Path, help="folder for p, T, m traces (CSV) and plots")
+    q.set_defaults(func=cmd_simulate)
     return parser
 
 

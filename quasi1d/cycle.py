@@ -1,0 +1,224 @@
+"""The periodic state: integrate one lobe period, shift the slots, repeat until periodic.
+
+The period map Phi takes the state of slots 1..n-1 at the start of a period (slot 0 is
+born empty-handed at that angle) to the same slots one period later.  Its fixed point is
+the machine's periodic state.  Plain iteration z <- Phi(z) converges slowly when leakage
+couples the chambers (an error leaves only after a chamber's whole life); the solver
+therefore applies Newton's method to Phi(z) - z, with the Jacobian of Phi taken by
+finite differences over a batch of perturbed states integrated together with z in the
+same pass (one shared step sequence; a batch costs little more than one state because
+the work per step is dominated by fixed overhead, not by the array length).  Once the
+step sequence has been found, later periods replay it, so that Phi is one fixed smooth
+map and Newton converges on it instead of on integration noise.
+
+Converged: p and T of every chamber at the period start change by less than
+``cycle_rtol`` (relative) and the period's mass and energy balance close to
+``balance_tol`` (mass relative to the period's throughput, energy relative to its
+indicated work; each with a floor of the ideal displacement's mass and p_suction V so
+that a pump delivering nothing is still judged).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .integrate import IntegrationError, PeriodRun, integrate_period
+from .model import (
+    ACC_H_DIS,
+    ACC_H_SUC,
+    ACC_M_DIS,
+    ACC_M_SUC,
+    ACC_OIL_H_IN,
+    ACC_OIL_H_OUT,
+    ACC_OIL_M_IN,
+    ACC_OIL_M_OUT,
+    ACC_Q,
+    ACC_W,
+    ChamberModel,
+)
+from .settings import Numerics
+
+# Once p, T and the balances change by less than this between periods, the period's step
+# sequence is frozen (replayed whatever its error estimate says): the state moves so
+# little that the steps stay as accurate as when they were chosen, and a fixed step
+# sequence keeps the period map one smooth function for Newton's method.
+FORCE_REPLAY_BELOW = 1.0e-3
+# Times the tolerance is tightened tenfold when Newton's method stalls.
+STALL_TIGHTEN = 2
+# Finite-difference step of the Jacobian, relative to each component's reference scale:
+# large against round-off (1e-16 / 1e-6) and small against curvature.
+FD_STEP = 1.0e-6
+
+
+@dataclass
+class CycleSolution:
+    model: ChamberModel
+    y_start: np.ndarray  # state at the start of the converged period (slot 0 empty)
+    run: PeriodRun  # the converged period (with trace)
+    cycles: int  # lobe periods integrated
+    converged: bool
+    message: str
+    dp_rel: float
+    dT_rel: float
+    mass_closure: float
+    energy_closure: float
+    conservation_mass: float  # stored change vs boundary flows (round-off only)
+    conservation_energy: float
+    n_rhs: int
+
+
+def balances(model: ChamberModel, y_start: np.ndarray, y_end: np.ndarray):
+    """Mass and energy closure of one period and the conservation residuals."""
+    n, nv = model.n, model.nv
+    a = y_end[nv * n:]
+    m_ref = model.suc.rho * model.geo.v_trapped
+    e_ref = model.suc.p * model.geo.v_trapped
+    throughput = max(abs(a[ACC_M_SUC]), m_ref)
+    work = max(abs(a[ACC_W]), e_ref)
+    m_in, m_out = a[ACC_M_SUC] + a[ACC_OIL_M_IN], a[ACC_M_DIS] + a[ACC_OIL_M_OUT]
+    e_in = a[ACC_H_SUC] + a[ACC_W] + a[ACC_Q] + a[ACC_OIL_H_IN]
+    e_out = a[ACC_H_DIS] + a[ACC_OIL_H_OUT]
+    stored_m0 = y_start[:n].sum() + (y_start[2 * n:3 * n].sum() if nv == 4 else 0.0)
+    stored_m1 = y_end[:n].sum() + (y_end[2 * n:3 * n].sum() if nv == 4 else 0.0)
+    stored_e0 = y_start[n:2 * n].sum() + (y_start[3 * n:4 * n].sum() if nv == 4 else 0.0)
+    stored_e1 = y_end[n:2 * n].sum() + (y_end[3 * n:4 * n].sum() if nv == 4 else 0.0)
+    mass_closure = abs(m_in - m_out) / throughput
+    energy_closure = abs(e_in - e_out) / work
+    cons_m = abs((stored_m1 - stored_m0) - (m_in - m_out)) / throughput
+    cons_e = abs((stored_e1 - stored_e0) - (e_in - e_out)) / work
+    return mass_closure, energy_closure, cons_m, cons_e
+
+
+def _pT(model, z):
+    _, _, p, T, _ = model.observe(model.geo.birth, z)
+    return p[1:], T[1:]
+
+
+def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolution:
+    n, nv = model.n, model.nv
+    scales = model.scales()
+    atol = num.atol * model.atol_scales()
+    idx = np.concatenate([np.arange(b * n + 1, (b + 1) * n) for b in range(nv)])
+    alive = np.array([model.geo.birth + k * model.geo.period <= model.geo.death
+                      for k in range(1, n)] * nv)
+    idx = idx[alive]
+    d = idx.size
+    newton = num.newton and d > 0
+    dz = FD_STEP * scales[idx]
+    z = model.initial_state()
+    replay = None
+    method = num.integrator
+    if method == "auto" and model.ports.model == "nozzle":
+        # a nozzle port on a small chamber is stiff from the first step: go implicit at once
+        method = "ros23"
+    cycles = n_rhs = 0
+    message = ""
+    converged = False
+    dp = dT = mc = ec = np.inf
+    best = None  # the iterate with the smallest residual: (norm, z, run, step, z_next, figures)
+    lam = 1.0
+    rtol = num.rtol
+    tightened = 0
+    for _ in range(num.max_cycles):
+        Y0 = np.repeat(z[None], d + 1 if newton else 1, axis=0)
+        if newton:
+            Y0[np.arange(1, d + 1), idx] += dz
+        run = integrate_period(model, Y0, method, rtol, atol, replay=replay,
+                               record=record, max_steps=num.max_steps,
+                               force_replay=max(dp, dT, mc, ec) < FORCE_REPLAY_BELOW)
+        cycles += 1
+        n_rhs += run.n_rhs
+        method = run.method  # "auto" settles on the method the first period needed
+        if method not in ("radau", "bdf"):
+            replay = run.steps
+        y_end = run.y[0]
+        _check_states(model, y_end)
+        z_next = model.shift(y_end)
+        p0, T0 = _pT(model, z)
+        p1, T1 = _pT(model, z_next)
+        dp = float(np.nanmax(np.abs(p1 / p0 - 1.0))) if p0.size else 0.0
+        dT = float(np.nanmax(np.abs(T1 / T0 - 1.0))) if T0.size else 0.0
+        mc, ec, _, _ = balances(model, z, y_end)
+        if max(dp, dT) < num.cycle_rtol and max(mc, ec) < num.balance_tol:
+            converged = True
+            break
+        if not newton:
+            z = z_next
+            continue
+        # Damped Newton on Phi(z) - z: a full step from the best iterate so far; a step
+        # that does not lower the residual is halved (the map has kinks where flows
+        # reverse), and after four halvings a plain cycle step restarts the search.
+        norm = float(np.max(np.abs(z_next - z)[idx] / scales[idx]))
+        if best is None or norm < best[0]:
+            Phi = np.stack([model.shift(yy)[idx] for yy in run.y[1:]])  # row i: input i
+            J = ((Phi - z_next[idx]) / dz[:, None]).T - np.eye(d)
+            try:
+                step = np.linalg.solve(J, -(z_next - z)[idx])
+            except np.linalg.LinAlgError:
+                step = None
+            if step is not None and not np.all(np.isfinite(step)):
+                step = None
+            best = (norm, z, run, step, z_next, (dp, dT, mc, ec))
+            lam = 1.0
+        else:
+            lam *= 0.5
+        z = best[4]
+        if best[3] is not None and lam >= 1.0 / 16.0:
+            for shrink in (1.0, 0.5, 0.25):  # keep the state physical
+                cand = best[1].copy()
+                cand[idx] += lam * shrink * best[3]
+                if _plausible(model, cand):
+                    z = cand
+                    break
+        elif tightened < STALL_TIGHTEN:
+            # Newton stalled: at a coarse tolerance the period map has kinks (flows that
+            # reverse inside a step); restart from the best state with a tighter one
+            tightened += 1
+            rtol *= 0.1
+            atol = atol * 0.1
+            replay = None
+            z = best[1]
+            best = None
+            dp = dT = mc = ec = np.inf
+        else:
+            best = None
+    else:
+        if best is not None and best[0] < float(np.max(np.abs(z_next - z)[idx] / scales[idx])):
+            _, z, run, _, _, (dp, dT, mc, ec) = best
+        message = (f"cycle not converged after {num.max_cycles} periods: relative change of p "
+                   f"{dp:.2e}, T {dT:.2e}, mass balance {mc:.2e}, energy balance {ec:.2e}")
+    mc, ec, cm, ce = balances(model, z, run.y[0])
+    model.cache.clear()  # the result keeps the model; not its work arrays
+    model.work.clear()
+    return CycleSolution(model, z, run, cycles, converged, message, dp, dT, mc, ec, cm, ce,
+                         n_rhs)
+
+
+def _plausible(model, z) -> bool:
+    """Masses positive in every living slot, oil non-negative, states inside the fluid's range."""
+    n = model.n
+    ages = model.geo.birth + model.geo.period * np.arange(1, n)
+    live = ages <= model.geo.death
+    m = z[1:n][live]
+    if not np.all(np.isfinite(z)) or np.any(m <= 0):
+        return False
+    if model.oil and np.any(z[2 * n:4 * n] < 0):
+        return False
+    V = model.geo.volume(ages[live])
+    return model.fluid.in_range(m / V, z[n + 1:2 * n][live] / m)
+
+
+def _check_states(model, y):
+    n = model.n
+    m, U = y[:n], y[n:2 * n]
+    if not (np.all(np.isfinite(y)) and np.all(m >= 0)):
+        raise IntegrationError("state not finite or chamber mass negative at the end of a period")
+    live = m > 0
+    if np.any(live):
+        ages = model.geo.birth + model.geo.period * (1 + np.arange(n))
+        # end of period: slot k has age birth + (k+1) period
+        V = model.geo.volume(np.minimum(ages, model.geo.death))
+        if not model.fluid.in_range(m[live] / V[live], U[live] / m[live]):
+            raise IntegrationError("chamber state left the range of the fluid's property table")

@@ -1,0 +1,87 @@
+"""Performance figures of a converged cycle (seed 003: mass flow, indicated and specific
+power, volumetric, adiabatic and isothermal efficiency; seed 001 Table 4).
+
+Definitions (per lobe period = one chamber's cycle, t_P = period / omega_outer):
+
+    mass_flow_kg_s              net mass drawn from the suction plenum / t_P
+    suction_volume_flow_L_min   mass flow / suction density, in L/min
+    indicated_power_W           work done on the gas, -sum of p dV over all chambers, / t_P
+    specific_power_J_kg         indicated power / mass flow
+    volumetric_efficiency       mass per cycle / (suction density * V at suction closing):
+                                the trapped volume, seed 001's "suction volume" (30 cc)
+    adiabatic_efficiency        mass flow * isentropic work (p_suc, T_suc -> p_dis) / power
+    isothermal_efficiency       mass flow * isothermal work at T_suc / power
+    discharge_temperature_K     temperature of the delivered gas at its mean enthalpy
+    leakage_kg_s                gross flow (|mdot| integrated) per path: between chambers,
+                                across the low- and the high-pressure end face
+
+Figures that are undefined (no net delivery) are None so that the JSON stays valid.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .cycle import CycleSolution
+from .model import (
+    ACC_H_DIS,
+    ACC_L_HP,
+    ACC_L_INT,
+    ACC_L_LP,
+    ACC_M_DIS,
+    ACC_M_SUC,
+    ACC_OIL_M_IN,
+    ACC_Q,
+    ACC_W,
+)
+
+
+def figures(sol: CycleSolution) -> dict:
+    model = sol.model
+    geo, op, fl = model.geo, model.op, model.fluid
+    a = model.acc(sol.run.y[0])
+    t_period = geo.period / geo.omega_outer
+    mdot = a[ACC_M_SUC] / t_period
+    power = a[ACC_W] / t_period
+    rho_s = model.suc.rho
+    delivered = mdot > 0
+    w_is = fl.work_isentropic(op.p_suction_Pa, op.T_suction_K, op.p_discharge_Pa)
+    w_it = fl.work_isothermal(op.p_suction_Pa, op.T_suction_K, op.p_discharge_Pa)
+    if a[ACC_M_DIS] > 0:
+        T_dis = float(fl.T_ph(op.p_discharge_Pa, a[ACC_H_DIS] / a[ACC_M_DIS]))
+    else:
+        T_dis = None
+
+    def ratio(num, den):
+        return float(num / den) if delivered and den > 0 else None
+
+    out = {
+        "mass_flow_kg_s": float(mdot),
+        "suction_volume_flow_L_min": float(mdot / rho_s * 60e3),
+        "indicated_power_W": float(power),
+        "specific_power_J_kg": ratio(power, mdot),
+        "volumetric_efficiency": float(a[ACC_M_SUC] / (rho_s * geo.v_trapped)),
+        "adiabatic_efficiency": ratio(mdot * w_is, power),
+        "isothermal_efficiency": ratio(mdot * w_it, power),
+        "discharge_temperature_K": T_dis,
+        "heat_to_gas_W": float(a[ACC_Q] / t_period),
+        "oil_flow_kg_s": float(a[ACC_OIL_M_IN] / t_period),
+        "leakage_kg_s": {
+            "interlobe": float(a[ACC_L_INT] / t_period),
+            "lp_face": float(a[ACC_L_LP] / t_period),
+            "hp_face": float(a[ACC_L_HP] / t_period),
+        },
+        "cycles": int(sol.cycles),
+        "converged": bool(sol.converged),
+        "mass_balance_error": float(sol.mass_closure),
+        "energy_balance_error": float(sol.energy_closure),
+        "chambers": int(model.n),
+        "speed_outer_rpm": float(geo.omega_outer * 60.0 / (2.0 * math.pi)),
+        "trapped_volume_m3": float(geo.v_trapped),
+        "suction_close_deg": math.degrees(geo.suction_close),
+        "discharge_open_deg": math.degrees(geo.discharge_open),
+        "fluid": op.fluid,
+    }
+    if not sol.converged:
+        out["message"] = sol.message
+    return out

@@ -1,0 +1,128 @@
+"""What a simulation hands back: the figures, the traces, the plots."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .cycle import CycleSolution
+from .performance import figures
+
+
+@dataclass(frozen=True)
+class SimulationResult:
+    """A converged (or stopped) cycle of the chamber model.
+
+    ``figures`` holds the performance figures (see :mod:`.performance`); ``machine`` holds
+    the traces over one lobe period: ``theta_rad`` (outer-rotor angle) and per slot arrays
+    ``volume_m3``, ``p_Pa``, ``T_K``, ``m_kg`` of shape (angles, slots); ``chamber`` holds
+    one chamber's life from birth to death (the slots' traces joined by age).
+    """
+
+    figures: dict
+    machine: dict = field(repr=False)
+    chamber: dict = field(repr=False)
+    solution: CycleSolution = field(repr=False)
+
+    @property
+    def converged(self) -> bool:
+        return bool(self.figures["converged"])
+
+    def summary(self) -> dict:
+        """The figures as a JSON-ready dict (floats, ints, None, nested dicts)."""
+        return dict(self.figures)
+
+    def write_traces(self, folder) -> list[Path]:
+        """Write chamber_cycle.csv (one chamber, birth to death) and chambers.csv (every
+        slot against the outer-rotor angle over one lobe period); returns the paths."""
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        c = self.chamber
+        one = folder / "chamber_cycle.csv"
+        np.savetxt(one, np.column_stack([c["angle_rad"], c["volume_m3"], c["p_Pa"], c["T_K"],
+                                         c["m_kg"]]),
+                   delimiter=",", header="angle_rad,volume_m3,p_Pa,T_K,m_kg", comments="",
+                   fmt="%.10e")
+        m = self.machine
+        n = m["p_Pa"].shape[1]
+        head = ["theta_rad"] + [f"{q}_{k}" for k in range(n)
+                                for q in ("volume_m3", "p_Pa", "T_K", "m_kg")]
+        cols = [m["theta_rad"]]
+        for k in range(n):
+            cols += [m["volume_m3"][:, k], m["p_Pa"][:, k], m["T_K"][:, k], m["m_kg"][:, k]]
+        allp = folder / "chambers.csv"
+        np.savetxt(allp, np.column_stack(cols), delimiter=",", header=",".join(head),
+                   comments="", fmt="%.10e")
+        return [one, allp]
+
+    def plot(self, folder, stem: str = "quasi1d") -> list[Path]:
+        """p against angle and p against V of one chamber, as PNG files."""
+        return plot_cycle(self, Path(folder), stem)
+
+
+def traces(sol: CycleSolution):
+    """Machine traces over the period and one chamber's life from the recorded states."""
+    model = sol.model
+    th = np.asarray(sol.run.trace_theta)
+    ys = np.asarray(sol.run.trace_y)
+    order = np.argsort(th, kind="stable")
+    th, ys = th[order], ys[order]
+    rows = [model.observe(t, y) for t, y in zip(th, ys, strict=True)]
+    ages = np.array([r[0] for r in rows])
+    V = np.array([r[1] for r in rows])
+    p = np.array([r[2] for r in rows])
+    T = np.array([r[3] for r in rows])
+    m = np.array([r[4] for r in rows])
+    machine = {"theta_rad": th, "volume_m3": V, "p_Pa": p, "T_K": T, "m_kg": m}
+    live = np.isfinite(p)
+    a = ages[live]
+    order = np.argsort(a, kind="stable")
+    chamber = {"angle_rad": a[order], "volume_m3": V[live][order], "p_Pa": p[live][order],
+               "T_K": T[live][order], "m_kg": m[live][order]}
+    return machine, chamber
+
+
+def make_result(sol: CycleSolution) -> SimulationResult:
+    machine, chamber = traces(sol)
+    return SimulationResult(figures(sol), machine, chamber, sol)
+
+
+def plot_cycle(result: SimulationResult, folder: Path, stem: str = "quasi1d") -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder.mkdir(parents=True, exist_ok=True)
+    c = result.chamber
+    geo = result.solution.model.geo
+    op = result.solution.model.op
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    ax.plot(np.degrees(c["angle_rad"]), c["p_Pa"] / 1e5, lw=1.4)
+    marks = ((geo.suction_close, "suction closes"), (geo.discharge_open, "discharge opens"))
+    for ang, lab in marks:
+        ax.axvline(math.degrees(ang), color="0.6", ls="--", lw=0.8)
+        ax.text(math.degrees(ang), ax.get_ylim()[1], lab, rotation=90, va="top", ha="right",
+                fontsize=7, color="0.4")
+    ax.axhline(op.p_discharge_Pa / 1e5, color="C3", lw=0.6, ls=":")
+    ax.axhline(op.p_suction_Pa / 1e5, color="C2", lw=0.6, ls=":")
+    ax.set_xlabel("outer-rotor angle since chamber birth [deg]")
+    ax.set_ylabel("chamber pressure [bar]")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    p1 = folder / f"{stem}_p_angle.png"
+    fig.savefig(p1, dpi=120)
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    ax.plot(c["volume_m3"] * 1e6, c["p_Pa"] / 1e5, lw=1.4)
+    ax.set_xlabel("chamber volume [cm$^3$]")
+    ax.set_ylabel("chamber pressure [bar]")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    p2 = folder / f"{stem}_p_V.png"
+    fig.savefig(p2, dpi=120)
+    plt.close(fig)
+    return [p1, p2]

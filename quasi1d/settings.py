@@ -1,0 +1,330 @@
+"""What the quasi-1D model is asked to do: the [operating], [leakage], [ports] and
+[numerics] sections of a case file, validated, as frozen dataclasses in SI units.
+
+Case-file keys carry their unit in their name (``p_suction_bar``, ``gap_um``); the
+dataclass fields hold SI values (``p_suction_Pa``, ``gap_m``).  ``from_section(d, where)``
+reads one TOML table; an unknown key or an impossible value raises
+:class:`rotorflow.errors.CaseError` with one line naming the key, the section and the file.
+
+Fluids (``[operating] fluid``):
+
+``"air"`` (default)
+    ideal gas with constant heat capacity: molar mass 28.97 g/mol and
+    cp = 1006.43 J/(kg K) (seed 001, Table 3), overridable with ``molar_mass_g_mol`` and
+    ``cp_J_kgK``.  Closed-form properties; the fast path.
+``"CoolProp::<name>"``
+    a real fluid from CoolProp's Helmholtz equations of state (``"CoolProp::Air"``,
+    ``"CoolProp::R134a"``, ...), evaluated through a table built once per run over the
+    range of states the operating point can reach (see :mod:`rotorflow.quasi1d.fluids`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from rotorflow.errors import CaseError
+
+BAR = 1.0e5
+AIR_MOLAR_MASS_G_MOL = 28.97  # seed 001, Table 3
+AIR_CP_J_KGK = 1006.43  # seed 001, Table 3
+R_UNIVERSAL = 8.314462618  # J/(mol K)
+
+LEAKAGE_MODELS = ("none", "nozzle", "fanno")
+PORT_MODELS = ("ideal", "nozzle")
+INTEGRATORS = ("auto", "dopri5", "bs3", "ros23", "radau", "bdf")
+
+
+def _number(d: dict, key: str, section: str, where: str, default=None, *, positive=False,
+            nonnegative=False, integer=False):
+    """Read one numeric key; a missing key gives ``default`` (None: required)."""
+    if key not in d:
+        if default is None:
+            raise CaseError(f"missing key '{key}' in [{section}] of {where}")
+        return default
+    v = d[key]
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise CaseError(f"key '{key}' in [{section}] of {where} must be a number, got {v!r}")
+    if not math.isfinite(v):
+        raise CaseError(f"key '{key}' in [{section}] of {where} must be finite, got {v!r}")
+    if integer and int(v) != v:
+        raise CaseError(f"key '{key}' in [{section}] of {where} must be an integer, got {v!r}")
+    if positive and v <= 0:
+        raise CaseError(f"key '{key}' in [{section}] of {where} must be positive, got {v!r}")
+    if nonnegative and v < 0:
+        raise CaseError(f"key '{key}' in [{section}] of {where} must not be negative, got {v!r}")
+    return int(v) if integer else float(v)
+
+
+def _choice(d: dict, key: str, section: str, where: str, choices, default):
+    v = d.get(key, default)
+    if not isinstance(v, str) or v not in choices:
+        allowed = ", ".join(f'"{c}"' for c in choices)
+        raise CaseError(
+            f"key '{key}' in [{section}] of {where} must be one of {allowed}, got {v!r}")
+    return v
+
+
+def _bool(d: dict, key: str, section: str, where: str, default: bool) -> bool:
+    v = d.get(key, default)
+    if not isinstance(v, bool):
+        raise CaseError(f"key '{key}' in [{section}] of {where} must be true or false, got {v!r}")
+    return v
+
+
+def _check_keys(d: dict, allowed, section: str, where: str) -> None:
+    if not isinstance(d, dict):
+        raise CaseError(f"[{section}] of {where} must be a table")
+    for k in d:
+        if k not in allowed:
+            raise CaseError(f"unknown key '{k}' in [{section}] of {where}")
+
+
+def check_fluid(name: str, where: str = "the case") -> str:
+    """Return ``name`` if it is a fluid this model knows, else raise CaseError."""
+    if name == "air":
+        return name
+    if isinstance(name, str) and name.startswith("CoolProp::"):
+        import CoolProp.CoolProp as CP
+
+        fluid = name.split("::", 1)[1]
+        known = CP.get_global_param_string("FluidsList").split(",")
+        aliases = {a for f in known for a in CP.get_fluid_param_string(f, "aliases").split(",")}
+        if fluid in known or fluid in aliases:
+            return name
+    raise CaseError(
+        f"unknown fluid {name!r} in [operating] of {where}: use \"air\" (ideal gas) "
+        f"or \"CoolProp::<name>\", e.g. \"CoolProp::Air\""
+    )
+
+
+@dataclass(frozen=True)
+class Operating:
+    """Operating point; pressures in Pa, temperatures in K, speed in rpm of the driven rotor.
+
+    Port angles are outer-rotor angles since the chamber's birth (radians); None means
+    derived from the table: suction closes at the volume maximum, discharge opens where
+    the volume has fallen to V_max / volume_ratio.
+    """
+
+    p_suction_Pa: float
+    p_discharge_Pa: float
+    T_suction_K: float
+    speed_rpm: float
+    fluid: str = "air"
+    volume_ratio: float | None = None
+    suction_close_rad: float | None = None
+    discharge_open_rad: float | None = None
+    T_wall_K: float | None = None  # None: equal to T_suction_K
+    heat_transfer_W_m2K: float = 0.0  # 0: adiabatic chambers (seed 001 neglects heat transfer)
+    molar_mass_kg_mol: float = AIR_MOLAR_MASS_G_MOL * 1e-3  # ideal-gas "air" only
+    cp_J_kgK: float = AIR_CP_J_KGK  # ideal-gas "air" only
+    oil_mass_ratio: float = 0.0  # injected oil mass per trapped gas mass; 0: no oil
+    T_oil_K: float | None = None  # None: equal to T_suction_K
+    oil_cp_J_kgK: float = 1900.0  # typical mineral compressor oil
+    # Time constant of gas-oil heat exchange; 1 ms is that of ~50 um droplets
+    # (tau = rho_oil c_oil d / (6 h) with h ~ 1e3 W/(m2 K)).
+    oil_time_constant_s: float = 1.0e-3
+
+    KEYS = (
+        "p_suction_bar", "p_discharge_bar", "T_suction_K", "speed_rpm", "fluid",
+        "volume_ratio", "suction_close_deg", "discharge_open_deg", "T_wall_K",
+        "heat_transfer_W_m2K", "molar_mass_g_mol", "cp_J_kgK", "oil_mass_ratio", "T_oil_K",
+        "oil_cp_J_kgK", "oil_time_constant_ms",
+        "driven",  # a geometry key that the case file keeps in [operating]; not used here
+    )
+
+    @property
+    def R_J_kgK(self) -> float:
+        return R_UNIVERSAL / self.molar_mass_kg_mol
+
+    @property
+    def pressure_ratio(self) -> float:
+        return self.p_discharge_Pa / self.p_suction_Pa
+
+    @property
+    def wall_temperature_K(self) -> float:
+        return self.T_suction_K if self.T_wall_K is None else self.T_wall_K
+
+    @property
+    def oil_temperature_K(self) -> float:
+        return self.T_suction_K if self.T_oil_K is None else self.T_oil_K
+
+    @classmethod
+    def from_section(cls, d: dict, where: str = "the case") -> Operating:
+        s = "operating"
+        _check_keys(d, cls.KEYS, s, where)
+        ps = _number(d, "p_suction_bar", s, where, positive=True)
+        pd = _number(d, "p_discharge_bar", s, where, positive=True)
+        if pd <= ps:
+            raise CaseError(
+                f"p_discharge_bar = {pd} is not above p_suction_bar = {ps} in [{s}] of {where}; "
+                "a compressor needs a discharge pressure above its suction pressure"
+            )
+        fluid = d.get("fluid", "air")
+        if not isinstance(fluid, str):
+            raise CaseError(f"key 'fluid' in [{s}] of {where} must be a string, got {fluid!r}")
+        check_fluid(fluid, where)
+        vr = d.get("volume_ratio")
+        if vr is not None:
+            vr = _number(d, "volume_ratio", s, where)
+            if vr < 1.0:
+                raise CaseError(
+                    f"key 'volume_ratio' in [{s}] of {where} must be at least 1, got {vr}")
+        sc = d.get("suction_close_deg")
+        do = d.get("discharge_open_deg")
+        if sc is not None:
+            sc = math.radians(_number(d, "suction_close_deg", s, where, nonnegative=True))
+        if do is not None:
+            do = math.radians(_number(d, "discharge_open_deg", s, where, nonnegative=True))
+        if sc is not None and do is not None and do <= sc:
+            raise CaseError(
+                f"discharge_open_deg must be later than suction_close_deg in [{s}] of {where}"
+            )
+        Tw = d.get("T_wall_K")
+        Toil = d.get("T_oil_K")
+        return cls(
+            p_suction_Pa=ps * BAR,
+            p_discharge_Pa=pd * BAR,
+            T_suction_K=_number(d, "T_suction_K", s, where, positive=True),
+            speed_rpm=_number(d, "speed_rpm", s, where, positive=True),
+            fluid=fluid,
+            volume_ratio=vr,
+            suction_close_rad=sc,
+            discharge_open_rad=do,
+            T_wall_K=None if Tw is None else _number(d, "T_wall_K", s, where, positive=True),
+            heat_transfer_W_m2K=_number(d, "heat_transfer_W_m2K", s, where, 0.0, nonnegative=True),
+            molar_mass_kg_mol=1e-3 * _number(d, "molar_mass_g_mol", s, where,
+                                             AIR_MOLAR_MASS_G_MOL, positive=True),
+            cp_J_kgK=_number(d, "cp_J_kgK", s, where, AIR_CP_J_KGK, positive=True),
+            oil_mass_ratio=_number(d, "oil_mass_ratio", s, where, 0.0, nonnegative=True),
+            T_oil_K=None if Toil is None else _number(d, "T_oil_K", s, where, positive=True),
+            oil_cp_J_kgK=_number(d, "oil_cp_J_kgK", s, where, 1900.0, positive=True),
+            oil_time_constant_s=1e-3 * _number(d, "oil_time_constant_ms", s, where, 1.0,
+                                               positive=True),
+        )
+
+    def check_ideal_gas(self, where: str = "the case") -> None:
+        """cp must exceed R for an ideal gas (gamma > 1)."""
+        if self.fluid == "air" and self.cp_J_kgK <= self.R_J_kgK:
+            raise CaseError(
+                f"cp_J_kgK = {self.cp_J_kgK} must exceed the gas constant "
+                f"{self.R_J_kgK:.1f} J/(kg K) in [operating] of {where}"
+            )
+
+
+@dataclass(frozen=True)
+class Leakage:
+    """Leakage through the clearance gaps along every sealing line of the chamber table.
+
+    ``model``: "none"; "nozzle" (isentropic nozzle, seed 001 Eqs. 7-8, mass flow times
+    ``coefficient``); "fanno" (isothermal flow with friction, seed 003 Eq. 9, with the
+    resistance ``zeta`` = f L_g / D_g + sum(xi), mass flow times ``coefficient``).
+    ``wall_motion`` adds the Couette flow dragged through the interlobe gaps by the rotor
+    surface (half the tip speed times the gap), from the older into the younger chamber.
+    """
+
+    gap_m: float = 0.0
+    model: str = "nozzle"
+    coefficient: float = 1.0
+    # zeta = f L/D + sum(xi): f ~ 0.04, L/D ~ 10 for a 1 mm land over a 50 um gap,
+    # plus ~1.5 for the entry and exit losses -> ~2; seed 003 takes it as an input.
+    zeta: float = 2.0
+    wall_motion: bool = False
+
+    KEYS = ("gap_um", "model", "coefficient", "zeta", "wall_motion")
+
+    @classmethod
+    def from_section(cls, d: dict, where: str = "the case") -> Leakage:
+        s = "leakage"
+        _check_keys(d, cls.KEYS, s, where)
+        model = _choice(d, "model", s, where, LEAKAGE_MODELS, "nozzle")
+        gap = _number(d, "gap_um", s, where, 0.0 if model == "none" else None, nonnegative=True)
+        if model != "none" and gap <= 0:
+            raise CaseError(f"key 'gap_um' in [{s}] of {where} must be positive for model "
+                            f'"{model}", got {gap}')
+        return cls(
+            gap_m=gap * 1e-6,
+            model=model,
+            coefficient=_number(d, "coefficient", s, where, 1.0, positive=True),
+            zeta=_number(d, "zeta", s, where, 2.0, positive=True),
+            wall_motion=_bool(d, "wall_motion", s, where, False),
+        )
+
+
+@dataclass(frozen=True)
+class Ports:
+    """Suction and discharge through the end-face port areas.
+
+    "ideal": lossless; a chamber open to a port is at the plenum pressure (an algebraic
+    constraint, solved for the port flow), and a pressure mismatch when the discharge
+    port opens is equalised at once (blow-down of the remaining gas isentropic, back-flow
+    mixed at constant volume).  "nozzle": isentropic nozzle through the exposed end-face
+    area times ``coefficient``.
+    """
+
+    model: str = "ideal"
+    coefficient: float = 0.8  # discharge coefficient of a sharp-edged port
+
+    KEYS = ("model", "coefficient")
+
+    @classmethod
+    def from_section(cls, d: dict, where: str = "the case") -> Ports:
+        s = "ports"
+        _check_keys(d, cls.KEYS, s, where)
+        return cls(
+            model=_choice(d, "model", s, where, PORT_MODELS, "ideal"),
+            coefficient=_number(d, "coefficient", s, where, 0.8, positive=True),
+        )
+
+
+@dataclass(frozen=True)
+class Numerics:
+    """How the chamber equations are integrated and when a cycle counts as converged."""
+
+    # "auto" (the default): dopri5, switching to ros23 when a period proves stiff, and
+    # ros23 from the start with nozzle ports; "dopri5": explicit Dormand-Prince 5(4);
+    # "bs3": Bogacki-Shampine 3(2); "ros23": Rosenbrock 2(3), linearly implicit;
+    # "radau"/"bdf": scipy's implicit solvers, the reference.
+    integrator: str = "auto"
+    # Tolerances per component: rtol relative; atol relative to reference scales (chamber
+    # mass and energy of a chamber at birth; a cycle's mass, enthalpy and work for the
+    # accumulated figures).
+    # 1e-4 holds mass flow and indicated power to ~1e-4 of a tight reference (bench).
+    rtol: float = 1.0e-4
+    atol: float = 1.0e-6
+    max_cycles: int = 40
+    # A cycle is periodic when p and T at the start of a lobe period change by less than
+    # this (relative) and the cycle's mass and energy balance close to balance_tol.
+    cycle_rtol: float = 1.0e-6
+    # 1e-7 so that the 1e-6 required of mass and energy closure holds with margin.
+    balance_tol: float = 1.0e-7
+    # A chamber is born / dies (handed over with its mass and energy) where its volume
+    # passes this fraction of V_max; its p V is booked as work, so no energy is lost.
+    vanish_fraction: float = 1.0e-3
+    max_steps: int = 200_000  # per lobe period; more means the problem is too stiff
+    newton: bool = True  # Newton shooting on the period map (else plain cycle iteration)
+
+    KEYS = ("integrator", "rtol", "atol", "max_cycles", "cycle_rtol", "balance_tol",
+            "vanish_fraction", "max_steps", "newton")
+
+    @classmethod
+    def from_section(cls, d: dict, where: str = "the case") -> Numerics:
+        s = "numerics"
+        _check_keys(d, cls.KEYS, s, where)
+        n = cls(
+            integrator=_choice(d, "integrator", s, where, INTEGRATORS, "auto"),
+            rtol=_number(d, "rtol", s, where, 1e-4, positive=True),
+            atol=_number(d, "atol", s, where, 1e-6, positive=True),
+            max_cycles=_number(d, "max_cycles", s, where, 40, positive=True, integer=True),
+            cycle_rtol=_number(d, "cycle_rtol", s, where, 1e-6, positive=True),
+            balance_tol=_number(d, "balance_tol", s, where, 1e-7, positive=True),
+            vanish_fraction=_number(d, "vanish_fraction", s, where, 1e-3, positive=True),
+            max_steps=_number(d, "max_steps", s, where, 200_000, positive=True, integer=True),
+            newton=_bool(d, "newton", s, where, True),
+        )
+        if n.vanish_fraction >= 0.1:
+            raise CaseError(f"key 'vanish_fraction' in [{s}] of {where} must be below 0.1")
+        return n
+
+

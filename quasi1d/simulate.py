@@ -1,0 +1,37 @@
+"""The one entry of the chamber model: a chamber table and an operating point in, figures out."""
+
+from __future__ import annotations
+
+from rotorflow.errors import CaseError
+
+from . import cycle
+from .chamber import prepare
+from .fluids import make_fluid
+from .model import build
+from .result import SimulationResult, make_result
+from .settings import Leakage, Numerics, Operating, Ports
+
+
+def simulate(table, operating: Operating, leakage: Leakage | None = None,
+             ports: Ports | None = None, numerics: Numerics | None = None) -> SimulationResult:
+    """Cycle-converged simulation of the machine whose chamber is ``table``.
+
+    ``table`` is a :class:`rotorflow.geometry.table.ChamberTable`; the speed in
+    ``operating`` is that of the driven rotor (converted with the table's
+    ``speed_ratio_outer_per_driven``).  A cycle that does not converge within
+    ``numerics.max_cycles`` is returned with ``converged`` False and a ``message`` in its
+    figures; bad input raises CaseError, an integration that cannot proceed
+    IntegrationError.  Without ``leakage`` the chambers are sealed; without ``ports`` the
+    ports are ideal; without ``numerics`` the defaults of :class:`Numerics` apply.
+    """
+    if table is None:
+        raise CaseError("no chamber table: the quasi-1D model needs the geometry's chamber table")
+    leakage = leakage or Leakage(model="none")
+    ports = ports or Ports()
+    numerics = numerics or Numerics()
+    operating.check_ideal_gas()
+    geo = prepare(table, operating.volume_ratio, operating.suction_close_rad,
+                  operating.discharge_open_rad, operating.speed_rpm, numerics.vanish_fraction)
+    fluid = make_fluid(operating, geo.v_max / geo.v_discharge)
+    model = build(geo, fluid, operating, leakage, ports)
+    return make_result(cycle.solve(model, numerics))

@@ -10,11 +10,12 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 CASE ?= cases/default.toml
+SWEEP ?= cases/lambda_wrap_sweep.toml
 PYTEST_ARGS ?=
 
 -include mk/*.mk
 
-.PHONY: help venv demo test lint bench case clean
+.PHONY: help venv demo test lint bench case sweep report clean
 
 help: ## list the targets
 	@grep -hE '^[a-zA-Z_-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  %-10s %s\n", $$1, $$2}'
@@ -27,14 +28,19 @@ $(STAMP): pyproject.toml
 
 venv: $(STAMP) ## create .venv and install rotorflow with its Python dependencies
 
-demo: $(STAMP) ## set up, then run the built-in default case
-	$(VENV)/bin/rotorflow geometry $(CASE)
-	$(VENV)/bin/rotorflow table $(CASE) --out build/$(basename $(notdir $(CASE)))/chamber_table.csv
-	$(VENV)/bin/rotorflow simulate $(CASE) --traces build/$(basename $(notdir $(CASE)))/quasi1d
+demo: $(STAMP) ## set up, then run the built-in default case through every stage (cached)
+	$(VENV)/bin/rotorflow run cases/default.toml
 
-case: demo ## run one case: make case CASE=path/to/case.toml
+case: $(STAMP) ## run what a case asks for, skipping what is cached: make case CASE=path/to/case.toml
+	$(VENV)/bin/rotorflow run $(CASE)
 
-test: $(STAMP) ## set up, then run the tests (all tiers but slow)
+sweep: $(STAMP) ## run a sweep on a local Dask cluster: make sweep SWEEP=cases/lambda_wrap_sweep.toml
+	$(VENV)/bin/rotorflow sweep $(SWEEP)
+
+report: $(STAMP) ## HTML report of a case (build/<case>/report/index.html): make report CASE=...
+	$(VENV)/bin/rotorflow run $(CASE) --want report
+
+test: $(STAMP) openfoam ## set up, then run the tests (all tiers but slow)
 	$(PY) -m pytest -m "not slow" $(PYTEST_ARGS)
 
 lint: $(STAMP) ## ruff over the whole tree

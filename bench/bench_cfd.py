@@ -1,0 +1,105 @@
+"""Run time against error of the CFD leakage mass flow as the gap mesh is refined.
+
+Each case runs on the meshes refinement 0.5, 1 (default), 2 and 4; the reference is the
+Richardson extrapolation of the three finest, computed in the same run.  Target: within
+2 % of it in under 60 s per case on 2 cores.  The run time is the wall time of a whole
+case: gmsh, gmshToFoam, checkMesh, set-up and rhoSimpleFoam.  Needs OpenFOAM; without it
+the benchmark records nothing and says why.
+"""
+
+from __future__ import annotations
+
+import csv
+import logging
+import math
+import tempfile
+import time
+from pathlib import Path
+
+from rotorflow.cases import foam, gap_case, gap_mesh
+from rotorflow.postprocess.richardson import richardson
+
+log = logging.getLogger(__name__)
+
+REFINEMENTS = (0.5, 1.0, 2.0, 4.0)
+TARGET_TIME_S = 60.0
+TARGET_ERROR = 0.02
+
+
+def cases() -> dict[str, gap_case.GapCase]:
+    """Representative gaps: the analytic channel, a laminar and a turbulent rotor tip."""
+    tip = gap_mesh.rotor_tip_gap(50e-6, 0.02)
+    tip_spec = gap_mesh.GapMeshSpec(cells_across=16, cells_along=40, along_grading=20)
+    return {
+        "channel-10um-PR1.005": gap_case.GapCase(
+            gap_mesh.parallel_channel(10e-6, 1e-3),
+            gap_case.GapFlow(1.005e5, 300.0, 1e5, gas=gap_case.Air(transport="const")),
+            gap_mesh.GapMeshSpec(cells_across=16, cells_along=20)),
+        "tip-50um-PR1.5-laminar": gap_case.GapCase(
+            tip, gap_case.GapFlow(1.5e5, 300.0, 1e5), tip_spec),
+        "tip-50um-PR2.5-kOmegaSST": gap_case.GapCase(
+            tip, gap_case.GapFlow(2.5e5, 300.0, 1e5), tip_spec),
+    }
+
+
+def run(results_dir: Path) -> list[dict]:
+    results_dir = Path(results_dir)
+    results_dir.mkdir(parents=True, exist_ok=True)
+    if not foam.is_available():
+        log.warning("bench_cfd: OpenFOAM not installed (make openfoam); nothing measured")
+        return []
+    rows: list[dict] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, case in cases().items():
+            runs = []
+            for r in REFINEMENTS:
+                t0 = time.perf_counter()
+                res = gap_case.run_gap_case(case.refined(r), Path(tmp) / f"{name}-{r}",
+                                            reuse=False)
+                runs.append((r, res, time.perf_counter() - t0))
+            ok = all(res.ok for _, res, _ in runs)
+            rich = richardson([res.mass_flow_kg_s_m for _, res, _ in runs[-3:]], 2.0) if ok \
+                else None
+            ref = rich.extrapolated if rich else math.nan
+            for r, res, wall in runs:
+                rows.append({
+                    "case": name,
+                    "refinement": r,
+                    "cells": res.cells,
+                    "status": res.status,
+                    "iterations": res.iterations,
+                    "time_s": wall,
+                    "solver_time_s": res.run_time_s,
+                    "mass_flow_kg_s_m": res.mass_flow_kg_s_m,
+                    "error": abs(res.mass_flow_kg_s_m / ref - 1),
+                    "reference_kind": rich.kind if rich else "failed",
+                    "observed_order": rich.order if rich else math.nan,
+                })
+    with (results_dir / "cfd.csv").open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    _plot(rows, results_dir / "cfd.png")
+    return rows
+
+
+def _plot(rows: list[dict], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    for name in dict.fromkeys(r["case"] for r in rows):
+        sel = [r for r in rows if r["case"] == name and r["refinement"] != REFINEMENTS[-1]]
+        ax.loglog([r["time_s"] for r in sel], [max(r["error"], 1e-6) for r in sel], "o-",
+                  label=name)
+    ax.axvline(TARGET_TIME_S, color="grey", ls=":")
+    ax.axhline(TARGET_ERROR, color="grey", ls=":")
+    ax.set_xlabel("wall time of one case on 2 cores [s]")
+    ax.set_ylabel("|mass flow / Richardson value - 1|")
+    ax.set_title("CFD leakage mass flow: meshes 0.5, 1, 2 x default")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

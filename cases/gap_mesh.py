@@ -1,0 +1,487 @@
+"""2D meshes of a clearance gap between two walls, from gmsh to a checked OpenFOAM mesh.
+
+A gap is two walls given as polylines ``y(x)`` in the gap's own frame: ``x`` runs along
+the gap from inlet to outlet (the common tangent at the sealing line), ``y`` across it,
+the lower wall below the upper one everywhere.  The geometry stage supplies the walls
+from a profile pair at a chosen rotor angle; :func:`parallel_channel` and
+:func:`cylinder_pair` are the analytic members.
+
+The mesh is structured: the gap is split at its throat (minimum gap) and along its
+centre line into four transfinite quad blocks, extruded one cell thick (front and back
+``empty``).  Cells across the gap are graded toward both walls, cells along it toward the
+throat; both gradings are geometric, and :attr:`GapMeshSpec.refinement` refines every
+direction by the same factor while keeping the spacing law, which is what Richardson
+extrapolation needs.
+
+Patches: ``inlet``, ``outlet``, ``lowerWall``, ``upperWall`` (both in group ``walls``)
+and ``frontAndBack``; the cell zone is ``fluid``.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import make_interp_spline
+from scipy.optimize import brentq, minimize_scalar
+
+from rotorflow.errors import CaseError
+
+from . import foam
+from .gmsh_session import gmsh_session
+
+PATCH_TYPES = {
+    "inlet": "patch",
+    "outlet": "patch",
+    "lowerWall": "wall",
+    "upperWall": "wall",
+    "frontAndBack": "empty",
+}
+
+#: Two gaps closer than this fraction of the minimum gap count as equally narrow when the
+#: throat is located (a parallel channel has its "throat" in the middle, not at one end).
+THROAT_FLAT_TOL = 1e-6
+
+#: The throat must lie this fraction of the wall length away from either end, or the block
+#: on the short side degenerates; extend the walls past the sealing line instead.
+THROAT_END_MARGIN = 0.05
+
+#: A gap counts as narrow where it is at most this multiple of its minimum; the length of
+#: that stretch is the gap length L of the correlations (L/h).
+NARROW_GAP_RATIO = 2.0
+
+#: Evenly spaced points per wall piece handed to gmsh as spline control points: with 241
+#: the spline follows the interpolated wall to ~1e-9 of the gap (81 left 1e-4).
+SPLINE_POINTS = 241
+
+
+def _as_polyline(points: np.ndarray, name: str) -> np.ndarray:
+    arr = np.array(points, dtype=float)  # a copy: the caller's array is never touched
+    if arr.ndim != 2 or arr.shape[1] != 2 or len(arr) < 2:
+        raise CaseError(f"{name} wall must be an (n >= 2, 2) array of (x, y) points")
+    if not np.all(np.isfinite(arr)):
+        raise CaseError(f"{name} wall has non-finite points")
+    if np.any(np.diff(arr[:, 0]) <= 0):
+        raise CaseError(f"{name} wall x must increase strictly from inlet to outlet")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class GapWalls:
+    """The two walls of a gap as polylines of (x, y) points in metres, x increasing.
+
+    Between the points the walls are interpolated by cubic splines (straight lines for
+    two points).  Both walls must span the same x range.
+    """
+
+    lower: np.ndarray
+    upper: np.ndarray
+
+    def __post_init__(self) -> None:
+        lower = _as_polyline(self.lower, "lower")
+        upper = _as_polyline(self.upper, "upper")
+        span = max(lower[-1, 0] - lower[0, 0], upper[-1, 0] - upper[0, 0])
+        if abs(lower[0, 0] - upper[0, 0]) > 1e-9 * span or abs(lower[-1, 0] - upper[-1, 0]) > (
+            1e-9 * span
+        ):
+            raise CaseError("lower and upper walls must span the same x range")
+        object.__setattr__(self, "lower", lower)
+        object.__setattr__(self, "upper", upper)
+        x = self.sample_x(2001)
+        if np.any(self.gap(x) <= 0):
+            raise CaseError("the walls touch or cross: the upper wall must stay above the lower")
+
+    @functools.cached_property
+    def _splines(self):
+        def spline(p: np.ndarray):
+            return make_interp_spline(p[:, 0], p[:, 1], k=min(3, len(p) - 1))
+
+        return spline(self.lower), spline(self.upper)
+
+    @property
+    def x_inlet(self) -> float:
+        return float(self.lower[0, 0])
+
+    @property
+    def x_outlet(self) -> float:
+        return float(self.lower[-1, 0])
+
+    def sample_x(self, n: int) -> np.ndarray:
+        return np.linspace(self.x_inlet, self.x_outlet, n)
+
+    def y_lower(self, x: np.ndarray | float) -> np.ndarray:
+        return self._splines[0](x)
+
+    def y_upper(self, x: np.ndarray | float) -> np.ndarray:
+        return self._splines[1](x)
+
+    def slope_lower(self, x: np.ndarray | float) -> np.ndarray:
+        return self._splines[0].derivative()(x)
+
+    def slope_upper(self, x: np.ndarray | float) -> np.ndarray:
+        return self._splines[1].derivative()(x)
+
+    def gap(self, x: np.ndarray | float) -> np.ndarray:
+        """Vertical distance between the walls (the gap where both are nearly parallel)."""
+        return self.y_upper(x) - self.y_lower(x)
+
+    @functools.cached_property
+    def throat_x(self) -> float:
+        """x of the minimum gap; the middle of the narrowest stretch when it is flat."""
+        x = self.sample_x(4001)
+        g = self.gap(x)
+        narrow = x[g <= g.min() * (1 + THROAT_FLAT_TOL)]
+        if narrow[-1] - narrow[0] > 2 * (x[1] - x[0]):
+            return float(0.5 * (narrow[0] + narrow[-1]))
+        i = int(np.argmin(g))
+        lo, hi = x[max(i - 1, 0)], x[min(i + 1, len(x) - 1)]
+        res = minimize_scalar(
+            lambda s: float(self.gap(s)), bounds=(lo, hi), method="bounded",
+            options={"xatol": 1e-12 * (self.x_outlet - self.x_inlet)},
+        )
+        return float(res.x)
+
+    @property
+    def min_gap(self) -> float:
+        return float(self.gap(self.throat_x))
+
+    @property
+    def length(self) -> float:
+        return self.x_outlet - self.x_inlet
+
+    def narrow_length(self, ratio: float = NARROW_GAP_RATIO) -> float:
+        """Length of the stretch around the throat where the gap is at most ``ratio`` times
+        its minimum: the gap length L of L/h (a parallel channel: its whole length)."""
+        limit = ratio * self.min_gap
+
+        def edge(end: float) -> float:
+            if self.gap(end) <= limit:
+                return end
+            return brentq(lambda x: float(self.gap(x)) - limit, self.throat_x, end)
+
+        return edge(self.x_outlet) - edge(self.x_inlet)
+
+    def extended(self, inlet_m: float = 0.0, outlet_m: float = 0.0) -> GapWalls:
+        """New walls continued straight along their end tangents by the given lengths."""
+        if inlet_m < 0 or outlet_m < 0:
+            raise CaseError("wall extensions must be >= 0")
+
+        def extend(p: np.ndarray, y, dy) -> np.ndarray:
+            pts = [p]
+            if inlet_m > 0:
+                x0 = p[0, 0]
+                pts.insert(0, [[x0 - inlet_m, float(y(x0) - inlet_m * dy(x0))]])
+            if outlet_m > 0:
+                x1 = p[-1, 0]
+                pts.append([[x1 + outlet_m, float(y(x1) + outlet_m * dy(x1))]])
+            return np.vstack(pts)
+
+        if inlet_m == 0 and outlet_m == 0:
+            return self
+        # Straight pieces join the spline with matching slope; resample the original walls
+        # densely so the joined polyline's spline does not overshoot at the junctions.
+        x = self.sample_x(SPLINE_POINTS * 4)
+        lower = np.column_stack([x, self.y_lower(x)])
+        upper = np.column_stack([x, self.y_upper(x)])
+        lower = extend(lower, self.y_lower, self.slope_lower)
+        upper = extend(upper, self.y_upper, self.slope_upper)
+        if inlet_m > 0:
+            lower, upper = _fill_straight(lower, 0), _fill_straight(upper, 0)
+        if outlet_m > 0:
+            lower, upper = _fill_straight(lower, -1), _fill_straight(upper, -1)
+        return GapWalls(lower, upper)
+
+
+def _fill_straight(p: np.ndarray, end: int, n: int = 20) -> np.ndarray:
+    """Put ``n`` points on the straight segment at ``end`` (0 or -1) of polyline ``p``."""
+    if end == 0:
+        a, b = p[0], p[1]
+        seg = a + np.linspace(0, 1, n, endpoint=False)[:, None] * (b - a)
+        return np.vstack([seg, p[1:]])
+    a, b = p[-2], p[-1]
+    seg = a + np.linspace(0, 1, n + 1)[1:, None] * (b - a)
+    return np.vstack([p[:-1], seg])
+
+
+def parallel_channel(gap_m: float, length_m: float) -> GapWalls:
+    """A plain parallel channel: walls y = 0 and y = gap, x from 0 to length."""
+    if gap_m <= 0 or length_m <= 0:
+        raise CaseError("channel gap and length must be > 0")
+    return GapWalls(
+        np.array([[0.0, 0.0], [length_m, 0.0]]), np.array([[0.0, gap_m], [length_m, gap_m]])
+    )
+
+
+def cylinder_pair(
+    gap_m: float,
+    radius_lower_m: float,
+    radius_upper_m: float,
+    upstream_m: float,
+    downstream_m: float | None = None,
+    points: int = 201,
+) -> GapWalls:
+    """The gap between two circular walls with minimum gap ``gap_m`` at x = 0.
+
+    A positive radius is convex toward the gap (a rotor tip), a negative one concave (a
+    bore), ``math.inf`` flat.  The walls span ``-upstream_m <= x <= downstream_m``
+    (``downstream_m`` defaults to ``upstream_m``).
+    """
+    downstream_m = upstream_m if downstream_m is None else downstream_m
+    if gap_m <= 0 or upstream_m <= 0 or downstream_m <= 0:
+        raise CaseError("gap and wall extents must be > 0")
+    for r in (radius_lower_m, radius_upper_m):
+        if abs(r) <= max(upstream_m, downstream_m):
+            raise CaseError("each wall radius must exceed the wall extent in magnitude")
+    x = np.linspace(-upstream_m, downstream_m, points)
+
+    def sag(r: float) -> np.ndarray:  # rise of a circle of radius r above its tangent
+        if math.isinf(r):
+            return np.zeros_like(x)
+        return np.sign(r) * (abs(r) - np.sqrt(r * r - x * x))
+
+    lower = np.column_stack([x, -sag(radius_lower_m)])
+    upper = np.column_stack([x, gap_m + sag(radius_upper_m)])
+    return GapWalls(lower, upper)
+
+
+def rotor_tip_gap(
+    gap_m: float,
+    radius_m: float,
+    inlet_gap_ratio: float = 20.0,
+    outlet_gap_ratio: float = 3.0,
+    points: int = 201,
+) -> GapWalls:
+    """Two equal convex walls cut where the gap is ``inlet_gap_ratio`` and
+    ``outlet_gap_ratio`` times its minimum.
+
+    Upstream the flow comes slowly from a wide inlet, so the inlet total pressure is the
+    upstream chamber's; downstream the walls stop soon after the throat, where the jet
+    leaves them (a static-pressure outlet on the jet, as into a chamber), which keeps a
+    laminar jet from attaching to one diverging wall or the other.
+    """
+    if inlet_gap_ratio <= 1 or outlet_gap_ratio <= 1:
+        raise CaseError("inlet and outlet gap ratios must exceed 1")
+
+    def extent(ratio: float) -> float:  # gap(x) = gap + 2 (R - sqrt(R^2 - x^2))
+        sag = 0.5 * (ratio - 1) * gap_m
+        if sag >= radius_m:
+            raise CaseError("rotor_tip_gap: the radius is too small for that gap ratio")
+        return math.sqrt(radius_m**2 - (radius_m - sag) ** 2)
+
+    return cylinder_pair(gap_m, radius_m, radius_m, extent(inlet_gap_ratio),
+                         extent(outlet_gap_ratio), points)
+
+
+@dataclass(frozen=True)
+class GapMeshSpec:
+    """How finely to mesh a gap.  Counts and gradings are those of the default mesh.
+
+    ``refinement`` multiplies every cell count and takes the ``refinement``-th root of
+    every cell-to-cell growth rate, so the meshes of a Richardson sequence share one
+    spacing law (2.0 halves every cell).
+    """
+
+    cells_across: int = 16
+    """Cells across the gap; even, half per wall side."""
+    wall_grading: float = 3.0
+    """Centre-cell height over wall-cell height (>= 1): resolves the wall shear layers."""
+    cells_along: int = 40
+    """Cells along the gap on each side of the throat."""
+    along_grading: float = 1.0
+    """End-cell length over throat-cell length (>= 1); 1 for a parallel channel."""
+    refinement: float = 1.0
+    depth_m: float | None = None
+    """Extrusion depth of the one-cell-thick 2D mesh; None: the minimum gap."""
+
+    def __post_init__(self) -> None:
+        if self.cells_across < 2 or self.cells_across % 2:
+            raise CaseError(f"cells_across must be even and >= 2, got {self.cells_across}")
+        if self.cells_along < 1:
+            raise CaseError(f"cells_along must be >= 1, got {self.cells_along}")
+        if self.wall_grading < 1 or self.along_grading < 1:
+            raise CaseError("wall_grading and along_grading must be >= 1")
+        if self.refinement <= 0:
+            raise CaseError("refinement must be > 0")
+        self.half_cells_across  # noqa: B018 - validates the refined counts are whole
+        self.cells_along_refined  # noqa: B018
+
+    def refined(self, factor: float) -> GapMeshSpec:
+        return replace(self, refinement=self.refinement * factor)
+
+    @staticmethod
+    def _count(base: int, factor: float, what: str) -> int:
+        n = base * factor
+        if abs(n - round(n)) > 1e-9 or round(n) < 1:
+            raise CaseError(f"refinement {factor} does not give a whole number of {what}")
+        return int(round(n))
+
+    @property
+    def half_cells_across(self) -> int:
+        return self._count(self.cells_across // 2, self.refinement, "cells across")
+
+    @property
+    def cells_along_refined(self) -> int:
+        return self._count(self.cells_along, self.refinement, "cells along")
+
+    @staticmethod
+    def _rate(total: float, base_cells: int, factor: float) -> float:
+        if base_cells < 2:
+            return 1.0
+        return (total ** (1.0 / (base_cells - 1))) ** (1.0 / factor)
+
+    @property
+    def across_rate(self) -> float:
+        """Growth of cell height from a wall toward the centre line, per cell."""
+        return self._rate(self.wall_grading, self.cells_across // 2, self.refinement)
+
+    def along_rates(self, length_up: float, length_down: float) -> tuple[float, float]:
+        """Growth of cell length away from the throat, per cell, upstream and downstream.
+
+        The longer side grows by ``along_grading`` from throat to end; the shorter side's
+        growth is chosen so that the two cells at the throat have the same length.  The
+        total growth of each side is fixed at refinement 1 and kept for every refinement.
+        """
+        long_side, short_side = max(length_up, length_down), min(length_up, length_down)
+        n = self.cells_along
+        q_long = self._rate(self.along_grading, n, 1.0)
+        first = long_side * _first_fraction(q_long, n)
+        if n == 1:
+            q_short = 1.0
+        else:
+            q_short = brentq(lambda q: short_side * _first_fraction(q, n) - first, 1e-3, 1e3)
+        rates = tuple(q ** (1.0 / self.refinement) for q in (q_long, q_short))
+        return rates if length_up >= length_down else rates[::-1]
+
+
+def _first_fraction(q: float, n: int) -> float:
+    """First cell of ``n`` growing by ``q`` per cell, as a fraction of their total."""
+    return 1.0 / n if abs(q - 1) < 1e-12 else (q - 1) / (q**n - 1)
+
+
+@dataclass(frozen=True)
+class GapMesh:
+    """A gap mesh written to disk, with what rotorflow needs to know of it."""
+
+    path: Path
+    walls: GapWalls = field(repr=False)
+    spec: GapMeshSpec
+    depth_m: float
+    cells: int
+
+
+def write_msh(walls: GapWalls, spec: GapMeshSpec, path: Path) -> GapMesh:
+    """Mesh the gap with gmsh and write ASCII MSH 2.2 (what gmshToFoam reads) to ``path``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    xt = walls.throat_x
+    margin = THROAT_END_MARGIN * walls.length
+    if not walls.x_inlet + margin < xt < walls.x_outlet - margin:
+        raise CaseError(
+            "the minimum gap lies at an end of the walls; extend them past the sealing line"
+        )
+    depth = spec.depth_m if spec.depth_m is not None else walls.min_gap
+    n_half = spec.half_cells_across
+    n_along = spec.cells_along_refined
+    q_across = spec.across_rate
+    q_along = spec.along_rates(xt - walls.x_inlet, walls.x_outlet - xt)
+
+    def y_mid(x):
+        return 0.5 * (walls.y_lower(x) + walls.y_upper(x))
+
+    walls_y = {"lower": walls.y_lower, "mid": y_mid, "upper": walls.y_upper}
+    stations = {"in": walls.x_inlet, "throat": xt, "out": walls.x_outlet}
+
+    with gmsh_session("gap", log_dir=path.parent) as gmsh:
+        geo = gmsh.model.geo
+        corner = {
+            (w, s): geo.addPoint(x, float(walls_y[w](x)), 0.0)
+            for w in walls_y
+            for s, x in stations.items()
+        }
+
+        def wall_piece(w: str, s0: str, s1: str) -> int:
+            # Evenly spaced control points: gmsh spaces the transfinite nodes by arc length
+            # along the spline, which uneven control points would distort.
+            x = np.linspace(stations[s0], stations[s1], SPLINE_POINTS)
+            y = walls_y[w](x)
+            inner = [geo.addPoint(float(a), float(b), 0.0) for a, b in zip(x[1:-1], y[1:-1],
+                                                                              strict=True)]
+            return geo.addSpline([corner[w, s0], *inner, corner[w, s1]])
+
+        along = {(w, side): wall_piece(w, *ends) for w in walls_y
+                 for side, ends in (("up", ("in", "throat")), ("down", ("throat", "out")))}
+        across = {(s, half): geo.addLine(corner[lo, s], corner[hi, s])
+                  for s in stations for half, (lo, hi) in (("lower", ("lower", "mid")),
+                                                           ("upper", ("mid", "upper")))}
+        for (_, side), c in along.items():
+            # Cells shrink toward the throat: upstream pieces run toward it, downstream away.
+            geo.mesh.setTransfiniteCurve(c, n_along + 1, "Progression",
+                                         1 / q_along[0] if side == "up" else q_along[1])
+        for (_, half), c in across.items():
+            # Lines run lower -> upper: grow away from the lower wall, shrink to the upper.
+            geo.mesh.setTransfiniteCurve(c, n_half + 1, "Progression",
+                                         q_across if half == "lower" else 1 / q_across)
+
+        # Each block: its loop (counter-clockwise) and the patch of each of its four edges.
+        blocks = []
+        for side, (s0, s1) in (("up", ("in", "throat")), ("down", ("throat", "out"))):
+            for half, (lo, hi) in (("lower", ("lower", "mid")), ("upper", ("mid", "upper"))):
+                loop = [along[lo, side], across[s1, half], -along[hi, side], -across[s0, half]]
+                patches = [
+                    "lowerWall" if lo == "lower" else None,
+                    "outlet" if s1 == "out" else None,
+                    "upperWall" if hi == "upper" else None,
+                    "inlet" if s0 == "in" else None,
+                ]
+                surface = geo.addPlaneSurface([geo.addCurveLoop(loop)])
+                geo.mesh.setTransfiniteSurface(surface)
+                geo.mesh.setRecombine(2, surface)
+                blocks.append((surface, patches))
+
+        groups: dict[str, list[int]] = {name: [] for name in PATCH_TYPES}
+        volumes = []
+        for surface, patches in blocks:
+            out = geo.extrude([(2, surface)], 0, 0, depth, numElements=[1], recombine=True)
+            # extrude returns the top surface, the volume, then one side per loop edge.
+            top, volume, sides = out[0], out[1], out[2:]
+            groups["frontAndBack"] += [surface, top[1]]
+            volumes.append(volume[1])
+            for patch, (_, tag) in zip(patches, sides, strict=True):
+                if patch is not None:
+                    groups[patch].append(tag)
+        geo.synchronize()
+        for name, tags in groups.items():
+            gmsh.model.addPhysicalGroup(2, tags, name=name)
+        gmsh.model.addPhysicalGroup(3, volumes, name="fluid")
+        gmsh.model.mesh.generate(3)
+        cells = sum(len(t) for t in gmsh.model.mesh.getElements(3)[1])
+        gmsh.option.setNumber("Mesh.MshFileVersion", 2.2)
+        gmsh.option.setNumber("Mesh.Binary", 0)
+        gmsh.option.setNumber("Mesh.SaveAll", 0)
+        gmsh.write(str(path))
+    return GapMesh(path, walls, spec, depth, cells)
+
+
+def build_foam_mesh(case_dir: Path, walls: GapWalls, spec: GapMeshSpec) -> tuple[GapMesh,
+                                                                                  foam.MeshQuality]:
+    """Mesh into ``case_dir/gap.msh``, convert with gmshToFoam, set patch types, checkMesh.
+
+    Missing ``system`` files get minimal stand-ins (checkMesh reads them).  A mesh that
+    checkMesh rejects raises :class:`~rotorflow.cases.foam.MeshCheckError` with its
+    complaints.
+    """
+    case_dir = Path(case_dir)
+    foam.ensure_system_files(case_dir)
+    mesh = write_msh(walls, spec, case_dir / "gap.msh")
+    foam.run(case_dir, "gmshToFoam", [mesh.path.name])
+    foam.set_patch_types(case_dir, PATCH_TYPES)
+    quality = foam.check_mesh(case_dir)
+    if quality.cells != mesh.cells:
+        raise foam.MeshCheckError(
+            f"OpenFOAM mesh has {quality.cells} cells, gmsh made {mesh.cells}, in {case_dir}"
+        )
+    return mesh, quality

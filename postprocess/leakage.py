@@ -1,0 +1,482 @@
+"""Leakage through a clearance gap: CFD against quasi-1D models, and a fitted flow coefficient.
+
+Every model is a callable ``model(point) -> mass flow per metre of gap depth (kg/s/m)``,
+so the comparison does not depend on where a model lives: the reference formulas here,
+rotorflow.quasi1d's leakage models through :func:`quasi1d_models`, or the fitted
+correlation (:meth:`FlowCoefficientFit.model`).
+
+Definitions (SI):
+    pressure ratio    PR = p_up / p_down (upstream total over downstream static)
+    ideal flow        m_id = h * isentropic nozzle flux(p_up, T_up -> p_down), h the
+                      minimum gap: what a loss-free nozzle of that throat passes
+    flow coefficient  Cd = m / m_id
+    Reynolds number   Re = m_id / mu(T_up), the ideal flow's gap Reynolds number
+                      rho U h / mu: known before the flow is, so a correlation in it can
+                      be evaluated directly by the quasi-1D model
+    gap length        L: the stretch where the gap is at most twice its minimum (a
+                      parallel channel: its length)
+    correlation       A Cd^2 + b X Cd = 1 with A = sum_i a_i phi_i(PR) (phi: "1",
+                      "ln(PR)", "1/PR") and X = 24 (L/h) psi^2 / (Re (1 - PR^-2)),
+                      psi = m_id / (h sqrt(p_up rho_up)); so Cd = 2 / (bX + sqrt((bX)^2 + 4A))
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+Model = Callable[["LeakagePoint"], float]
+
+#: The definitions above, stored with every fit so a JSON file explains itself.
+DEFINITIONS = " ".join(__doc__.split("Definitions (SI):")[1].split())
+
+
+@dataclass(frozen=True)
+class LeakagePoint:
+    """One operating point of a gap, with its CFD mass flow when known."""
+
+    name: str
+    gap_m: float
+    length_m: float
+    p_up_Pa: float
+    T_up_K: float
+    p_down_Pa: float
+    mu_Pa_s: float
+    """Viscosity at T_up."""
+    R_J_kgK: float = 287.05
+    gamma: float = 1.4
+    wall_speed_m_s: float = 0.0
+    mass_flow_kg_s_m: float = math.nan
+    """CFD mass flow per metre of depth (Richardson-extrapolated where available)."""
+
+    @property
+    def pressure_ratio(self) -> float:
+        return self.p_up_Pa / self.p_down_Pa
+
+    @property
+    def length_over_gap(self) -> float:
+        return self.length_m / self.gap_m
+
+    @property
+    def ideal_mass_flow(self) -> float:
+        return self.gap_m * isentropic_mass_flux(self.p_up_Pa, self.T_up_K, self.p_down_Pa,
+                                                 self.gamma, self.R_J_kgK)
+
+    @property
+    def reynolds(self) -> float:
+        return self.ideal_mass_flow / self.mu_Pa_s
+
+    @property
+    def flow_coefficient(self) -> float:
+        return self.mass_flow_kg_s_m / self.ideal_mass_flow
+
+
+# --- reference formulas -------------------------------------------------------------------
+
+
+def isentropic_mass_flux(p0: float, T0: float, p: float, gamma: float, R: float) -> float:
+    """Mass flux (kg/s/m^2) of an isentropic nozzle from rest at p0, T0 to p; choked below
+    the critical pressure."""
+    p = max(p, p0 * (2 / (gamma + 1)) ** (gamma / (gamma - 1)))
+    x = p / p0
+    return p0 * math.sqrt(
+        2 * gamma / ((gamma - 1) * R * T0) * (x ** (2 / gamma) - x ** ((gamma + 1) / gamma))
+    )
+
+
+def plane_poiseuille_mass_flow(point: LeakagePoint) -> float:
+    """Isothermal, fully developed laminar flow between parallel plates (per metre depth):
+    m' = h^3 (p_up^2 - p_down^2) / (24 mu R T L), the compressible form of
+    m' = rho h^3 dp / (12 mu L) with rho varying along the channel as p does."""
+    p = point
+    return p.gap_m**3 * (p.p_up_Pa**2 - p.p_down_Pa**2) / (
+        24 * p.mu_Pa_s * p.R_J_kgK * p.T_up_K * p.length_m
+    )
+
+
+def nozzle_model(coefficient: float = 1.0) -> Model:
+    """The isentropic nozzle through the minimum gap times ``coefficient``."""
+    return lambda p: coefficient * p.ideal_mass_flow
+
+
+def quasi1d_models(coefficient: float | None = None, zeta: float | None = None) -> dict[str, Model]:
+    """rotorflow.quasi1d's leakage models as callables, with its default parameters.
+
+    Uses ``rotorflow.quasi1d.flows`` (``nozzle_f``, ``fanno_f``, ``fanno_choke_ratio``)
+    and the defaults of ``rotorflow.quasi1d.Leakage``; raises ImportError naming what is
+    missing when that module does not provide them.
+    """
+    try:
+        from rotorflow.quasi1d import Leakage, flows
+    except ImportError as exc:  # pragma: no cover - depends on the other package's state
+        raise ImportError(f"rotorflow.quasi1d leakage models unavailable: {exc}") from exc
+    missing = [n for n in ("nozzle_f", "fanno_f", "fanno_choke_ratio") if not hasattr(flows, n)]
+    if missing:
+        raise ImportError(f"rotorflow.quasi1d.flows lacks {', '.join(missing)}")
+    defaults = Leakage()
+    cd = defaults.coefficient if coefficient is None else coefficient
+    z = defaults.zeta if zeta is None else zeta
+    x_choke = flows.fanno_choke_ratio(z)
+
+    def scale(p: LeakagePoint) -> float:  # gap * sqrt(p1 rho1), rho1 at the upstream state
+        return cd * p.gap_m * math.sqrt(p.p_up_Pa * p.p_up_Pa / (p.R_J_kgK * p.T_up_K))
+
+    def nozzle(p: LeakagePoint) -> float:
+        return scale(p) * float(flows.nozzle_f(1.0 / p.pressure_ratio, p.gamma))
+
+    def fanno(p: LeakagePoint) -> float:
+        return scale(p) * float(flows.fanno_f(1.0 / p.pressure_ratio, z, x_choke))
+
+    return {"quasi1d-nozzle": nozzle, f"quasi1d-fanno(zeta={z:g})": fanno}
+
+
+# --- comparison ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ModelSummary:
+    model: str
+    max_abs_error: float
+    rms_error: float
+    mean_error: float
+
+
+@dataclass(frozen=True)
+class ComparisonTable:
+    """CFD mass flow against each model: ``errors[model][i]`` = model / CFD - 1."""
+
+    points: tuple[LeakagePoint, ...]
+    predictions: Mapping[str, np.ndarray]
+    errors: Mapping[str, np.ndarray]
+
+    def summary(self) -> list[ModelSummary]:
+        out = []
+        for name, err in self.errors.items():
+            out.append(ModelSummary(name, float(np.max(np.abs(err))),
+                                    float(np.sqrt(np.mean(err**2))), float(np.mean(err))))
+        return out
+
+    def rows(self) -> list[dict[str, float | str]]:
+        rows = []
+        for i, p in enumerate(self.points):
+            row: dict[str, float | str] = {
+                "point": p.name,
+                "gap_um": p.gap_m * 1e6,
+                "L_over_h": p.length_over_gap,
+                "pressure_ratio": p.pressure_ratio,
+                "wall_speed_m_s": p.wall_speed_m_s,
+                "reynolds": p.reynolds,
+                "cfd_kg_s_m": p.mass_flow_kg_s_m,
+                "cfd_Cd": p.flow_coefficient,
+            }
+            for name in self.predictions:
+                row[f"{name}_kg_s_m"] = float(self.predictions[name][i])
+                row[f"{name}_error"] = float(self.errors[name][i])
+            rows.append(row)
+        return rows
+
+    def write_csv(self, path: Path) -> Path:
+        rows = self.rows()
+        path = Path(path)
+        with path.open("w", newline="") as fh:
+            writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
+        return path
+
+    def markdown(self) -> str:
+        """The summary as a Markdown table (one row per model)."""
+        lines = ["| model | max abs error | RMS error | mean error |", "| --- | --- | --- | --- |"]
+        for s in self.summary():
+            lines.append(f"| {s.model} | {s.max_abs_error:.1%} | {s.rms_error:.1%} | "
+                         f"{s.mean_error:+.1%} |")
+        return "\n".join(lines) + "\n"
+
+
+def compare(points: Sequence[LeakagePoint], models: Mapping[str, Model]) -> ComparisonTable:
+    """Evaluate every model at every point with a finite, positive CFD mass flow."""
+    pts = tuple(points)
+    if not pts:
+        raise ValueError("no leakage points to compare")
+    bad = [p.name for p in pts if not (math.isfinite(p.mass_flow_kg_s_m) and
+                                       p.mass_flow_kg_s_m > 0)]
+    if bad:
+        raise ValueError(f"points without a valid CFD mass flow: {', '.join(bad)}")
+    cfd = np.array([p.mass_flow_kg_s_m for p in pts])
+    preds = {name: np.array([float(m(p)) for p in pts]) for name, m in models.items()}
+    return ComparisonTable(pts, preds, {name: v / cfd - 1.0 for name, v in preds.items()})
+
+
+def mismatches(
+    measured: Mapping[str, float], reference: Mapping[str, float], rtol: float
+) -> list[str]:
+    """Names (with values) where ``measured`` differs from ``reference`` by more than rtol,
+    or is missing or non-finite; an empty list means agreement."""
+    out = []
+    for name, ref in reference.items():
+        val = measured.get(name, math.nan)
+        if not math.isfinite(val) or abs(val - ref) > rtol * abs(ref):
+            out.append(f"{name}: {val:.6g} against {ref:.6g} (rtol {rtol:g})")
+    return out
+
+
+# --- fitted flow coefficient --------------------------------------------------------------
+#
+# A gap is a nozzle and a channel in series.  For incompressible flow the pressure drop is
+# the sum of a loss m^2 / (2 rho h^2 Cd0^2) and a laminar friction 12 mu L m / (rho h^3),
+# which in terms of Cd = m / m_id reads
+#
+#     A Cd^2 + b X Cd = 1,    A = 1 / Cd0^2,    X = 24 (L/h) / Re,
+#
+# with Cd0 the inviscid coefficient and b = 1 for a plane channel of length L.  For a
+# compressible gap the isothermal lubrication flow replaces the friction term, which
+# turns X into 24 (L/h) psi^2 / (Re (1 - 1/PR^2)), psi the nozzle's dimensionless flux
+# (m_id = h psi sqrt(p_up rho_up)); at PR -> 1 both forms agree.  The fit finds b (how
+# long the curved gap is in effect, relative to L) and A as a linear function of
+# INERTIAL_FEATURES of the pressure ratio; both enter linearly, so it is least squares.
+
+#: Functions of the pressure ratio whose combination is 1 / Cd0^2 of the inviscid part.
+INERTIAL_FEATURES: dict[str, Callable[[np.ndarray], np.ndarray]] = {
+    "1": np.ones_like,
+    "ln(PR)": np.log,
+    "1/PR": np.reciprocal,
+}
+
+DEFAULT_INERTIAL = ("1", "ln(PR)")
+
+
+def nozzle_psi(pressure_ratio, gamma: float = 1.4):
+    """Dimensionless isentropic nozzle flux: m'' / sqrt(p_up rho_up) (choked below the
+    critical pressure ratio)."""
+    pr = np.asarray(pressure_ratio, dtype=float)
+    x = np.maximum(1.0 / pr, (2 / (gamma + 1)) ** (gamma / (gamma - 1)))
+    return np.sqrt(2 * gamma / (gamma - 1) * (x ** (2 / gamma) - x ** ((gamma + 1) / gamma)))
+
+
+def viscous_parameter(reynolds, pressure_ratio, length_over_gap, gamma: float = 1.4):
+    """X = 24 (L/h) psi^2 / (Re (1 - 1/PR^2)): Cd of laminar lubrication flow is 1 / X."""
+    pr = np.asarray(pressure_ratio, dtype=float)
+    return (24 * np.asarray(length_over_gap, dtype=float) * nozzle_psi(pr, gamma) ** 2
+            / (np.asarray(reynolds, dtype=float) * (1 - pr**-2.0)))
+
+
+@dataclass(frozen=True)
+class FlowCoefficientFit:
+    """Cd(Re, PR, L/h) from A(PR) Cd^2 + b X Cd = 1 (see the comment above), fitted to CFD."""
+
+    inertial_features: tuple[str, ...]
+    inertial: tuple[float, ...]
+    """Coefficients of A = sum_i a_i phi_i(PR) = 1 / Cd0^2."""
+    viscous: float
+    """b: the friction of the gap relative to a plane channel of length L."""
+    gamma: float = 1.4
+    ranges: dict[str, tuple[float, float]] = field(default_factory=dict)
+    """The range of Re, PR and L/h the fit saw; outside it Cd is an extrapolation."""
+    leave_out_errors: tuple[float, ...] = ()
+    """Mass-flow errors of each point predicted by a fit without it (model/CFD - 1)."""
+    definitions: str = DEFINITIONS
+
+    def flow_coefficient(self, reynolds, pressure_ratio, length_over_gap):
+        pr = np.asarray(pressure_ratio, dtype=float)
+        a = sum(c * INERTIAL_FEATURES[f](pr) for f, c in zip(self.inertial_features,
+                                                               self.inertial, strict=True))
+        b = self.viscous * viscous_parameter(reynolds, pr, length_over_gap, self.gamma)
+        cd = 2.0 / (b + np.sqrt(b * b + 4.0 * a))  # the positive root, free of cancellation
+        return float(cd) if np.ndim(cd) == 0 else cd
+
+    def model(self) -> Model:
+        """The fit as a leakage model for :func:`compare`."""
+        return lambda p: p.ideal_mass_flow * self.flow_coefficient(
+            p.reynolds, p.pressure_ratio, p.length_over_gap)
+
+    def to_json(self) -> str:
+        d = asdict(self)
+        d["kind"] = "rotorflow flow-coefficient fit: A(PR) Cd^2 + b X Cd = 1"
+        return json.dumps(d, indent=2) + "\n"
+
+    @classmethod
+    def from_json(cls, text: str) -> FlowCoefficientFit:
+        d = json.loads(text)
+        unknown = [f for f in d["inertial_features"] if f not in INERTIAL_FEATURES]
+        if unknown:
+            raise ValueError(f"unknown flow-coefficient feature(s): {', '.join(unknown)}")
+        return cls(
+            inertial_features=tuple(d["inertial_features"]),
+            inertial=tuple(float(c) for c in d["inertial"]),
+            viscous=float(d["viscous"]),
+            gamma=float(d.get("gamma", 1.4)),
+            ranges={k: (float(v[0]), float(v[1])) for k, v in d.get("ranges", {}).items()},
+            leave_out_errors=tuple(float(e) for e in d.get("leave_out_errors", ())),
+            definitions=d.get("definitions", ""),
+        )
+
+    def save(self, path: Path) -> Path:
+        path = Path(path)
+        tmp = path.with_suffix(path.suffix + ".tmp")
+        tmp.write_text(self.to_json())
+        tmp.replace(path)
+        return path
+
+    @classmethod
+    def load(cls, path: Path) -> FlowCoefficientFit:
+        return cls.from_json(Path(path).read_text())
+
+
+def _solve(points: Sequence[LeakagePoint], features: Sequence[str],
+           gamma: float) -> FlowCoefficientFit:
+    pr = np.array([p.pressure_ratio for p in points])
+    cd = np.array([p.flow_coefficient for p in points])
+    x = viscous_parameter([p.reynolds for p in points], pr,
+                          [p.length_over_gap for p in points], gamma)
+    # Residual A Cd^2 + b X Cd - 1 changes by (1 + A Cd^2) dCd/Cd, between one and two
+    # times the relative error of Cd: plain least squares weighs points nearly evenly.
+    design = np.column_stack([cd**2 * INERTIAL_FEATURES[f](pr) for f in features] + [x * cd])
+    coef, *_ = np.linalg.lstsq(design, np.ones(len(points)), rcond=None)
+    return FlowCoefficientFit(tuple(features), tuple(float(c) for c in coef[:-1]),
+                              float(coef[-1]), gamma)
+
+
+def fit_flow_coefficient(
+    points: Sequence[LeakagePoint], features: Sequence[str] = DEFAULT_INERTIAL
+) -> FlowCoefficientFit:
+    """Least-squares fit of the series-resistance form, with leave-one-out errors."""
+    pts = [p for p in points if math.isfinite(p.mass_flow_kg_s_m) and p.mass_flow_kg_s_m > 0]
+    n_coef = len(features) + 1
+    if len(pts) < n_coef + 1:
+        raise ValueError(f"{len(pts)} valid points cannot fit {n_coef} coefficients "
+                         "and leave one out")
+    gammas = {p.gamma for p in pts}
+    if len(gammas) != 1:
+        raise ValueError("all points of a fit must share one gas (gamma)")
+    gamma = gammas.pop()
+    fit = _solve(pts, tuple(features), gamma)
+    loo = []
+    for i, p in enumerate(pts):
+        pred = _solve(pts[:i] + pts[i + 1 :], tuple(features), gamma).model()(p)
+        loo.append(pred / p.mass_flow_kg_s_m - 1.0)
+
+    def span(values) -> tuple[float, float]:
+        values = list(values)
+        return (float(min(values)), float(max(values)))
+
+    return replace(
+        fit,
+        ranges={
+            "reynolds": span(p.reynolds for p in pts),
+            "pressure_ratio": span(p.pressure_ratio for p in pts),
+            "length_over_gap": span(p.length_over_gap for p in pts),
+        },
+        leave_out_errors=tuple(float(e) for e in loo),
+    )
+
+
+# --- report -------------------------------------------------------------------------------
+
+
+def write_report(
+    points: Sequence[LeakagePoint],
+    out_dir: Path,
+    models: Mapping[str, Model],
+    *,
+    features: Sequence[str] = DEFAULT_INERTIAL,
+) -> dict:
+    """Fit the flow coefficient and compare every model with the CFD points.
+
+    The fit uses the points with stationary walls (the correlation has no wall-speed
+    term); the moving-wall points are compared like the others, which shows what the
+    wall motion does to each model's error.  Writes ``leakage_errors.csv``,
+    ``leakage_errors.md``, ``flow_coefficient.json`` and ``flow_coefficient.png``;
+    returns the summary figures.
+    """
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    fit = fit_flow_coefficient([p for p in points if p.wall_speed_m_s == 0], features)
+    fit.save(out_dir / "flow_coefficient.json")
+    table = compare(points, {**models, "cfd-calibrated": fit.model()})
+    table.write_csv(out_dir / "leakage_errors.csv")
+    loo = np.asarray(fit.leave_out_errors)
+    text = table.markdown() + (
+        f"\ncfd-calibrated left-out prediction error: max {np.max(np.abs(loo)):.1%}, "
+        f"RMS {np.sqrt(np.mean(loo**2)):.1%} over {len(loo)} points\n")
+    (out_dir / "leakage_errors.md").write_text(text)
+    _plot_fit(points, fit, out_dir / "flow_coefficient.png")
+    return {
+        "models": [asdict(s) for s in table.summary()],
+        "fit": {"inertial_features": fit.inertial_features, "inertial": fit.inertial,
+                "viscous": fit.viscous,
+                "leave_out_max_error": float(np.max(np.abs(loo))),
+                "leave_out_rms_error": float(np.sqrt(np.mean(loo**2)))},
+    }
+
+
+def _plot_fit(points: Sequence[LeakagePoint], fit: FlowCoefficientFit, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    cd = np.array([p.flow_coefficient for p in points])
+    pred = np.array([fit.flow_coefficient(p.reynolds, p.pressure_ratio, p.length_over_gap)
+                     for p in points])
+    re = np.array([p.reynolds for p in points])
+    pr = np.array([p.pressure_ratio for p in points])
+    moving = np.array([p.wall_speed_m_s != 0 for p in points])
+    sc = ax.scatter(re[~moving], cd[~moving], c=np.log(pr[~moving]), marker="o", label="CFD")
+    ax.scatter(re[moving], cd[moving], c="k", marker="x", label="CFD, moving walls")
+    ax.scatter(re, pred, facecolors="none", edgecolors="r", marker="s", label="fit")
+    fig.colorbar(sc, ax=ax, label="ln(pressure ratio)")
+    ax.set_xscale("log")
+    ax.set_xlabel("Re = ideal mass flow per depth / mu")
+    ax.set_ylabel("flow coefficient Cd")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def report_section(artifact: Path, report_dir: Path, case):
+    """The ``cfd.leakage`` stage's part of the HTML report: mesh studies (failed runs
+    named with their reasons), the error table of each model and the fitted Cd."""
+    from rotorflow.postprocess.report import Section, esc, figure, table
+
+    artifact = Path(artifact)
+    body = []
+    studies = json.loads((artifact / "studies.json").read_text())
+    failed = [s for s in studies if not s["ok"]]
+    if failed:
+        body.append("<p class='warn'>Failed runs, left out of the comparison and the fit: "
+                    + "; ".join(esc(f"{s['name']}: {', '.join(s['failures'])}") for s in failed)
+                    + "</p>")
+    body.append(table(
+        ["point", "mesh convergence", "observed order", "default mesh vs extrapolated",
+         "extrapolated kg/s/m"],
+        [[s["name"], s["kind"], s["order"], s["default_error"], s["extrapolated_kg_s_m"]]
+         for s in studies],
+        ["failed" if not s["ok"] else "" for s in studies]))
+    errors = artifact / "leakage_errors.csv"
+    if errors.is_file():
+        with errors.open() as fh:
+            rows = list(csv.DictReader(fh))
+        models = [k[: -len("_error")] for k in rows[0] if k.endswith("_error")]
+        body.append(table(["point", "Re", "PR", "L/h", "CFD Cd"] + [f"{m} error" for m in models],
+                          [[r["point"], float(r["reynolds"]), float(r["pressure_ratio"]),
+                            float(r["L_over_h"]), float(r["cfd_Cd"])]
+                           + [float(r[f"{m}_error"]) for m in models] for r in rows]))
+        body.append(f"<pre>{esc((artifact / 'leakage_errors.md').read_text())}</pre>")
+    if (artifact / "flow_coefficient.png").is_file():
+        name = "cfd_leakage_flow_coefficient.png"
+        (Path(report_dir) / name).write_bytes((artifact / "flow_coefficient.png").read_bytes())
+        body.append(figure(name, "Flow coefficient: CFD and the fitted correlation"))
+    if (artifact / "flow_coefficient.json").is_file():
+        fit = FlowCoefficientFit.load(artifact / "flow_coefficient.json")
+        body.append(f"<p>Fitted correlation ({esc(fit.definitions)}): inertial "
+                    f"{esc(dict(zip(fit.inertial_features, fit.inertial, strict=True)))}, "
+                    f"viscous b = {fit.viscous:.4g}.</p>")
+    return Section("CFD: leakage through clearance gaps", "".join(body))

@@ -200,6 +200,19 @@ class ChamberModel:
             self.work[key] = w
         return w
 
+    def _flow_coefficient(self, p1, r1, x, psi):
+        """Cd of the CFD fit for each leakage path: Re from the ideal nozzle flow per unit
+        sealing-line length (the fit's definition), PR = p_up / p_down, L/h of the land."""
+        leak = self.leak
+        flowing = (x < 1.0 - 1e-12) & (psi > 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            re = leak.gap_m * psi * np.sqrt(p1 * r1) / leak.viscosity_Pa_s
+            cd = leak.correlation.flow_coefficient(
+                np.where(flowing, re, 1.0), np.where(flowing, 1.0 / x, 2.0),
+                leak.land_m / leak.gap_m)
+        # No pressure difference, no flow: Cd is then immaterial (and 0/0 in the fit).
+        return np.where(flowing, cd, 1.0)
+
     def rhs(self, theta: float, y: np.ndarray, seg: Segment) -> np.ndarray:
         """dy/dtheta for a batch of states y (B, n_state) inside segment ``seg``."""
         n, na, fl = self.n, seg.n_act, self.fluid
@@ -235,6 +248,8 @@ class ChamberModel:
                 f[:, nl:] = flows.nozzle_f(x[:, nl:], k1 if scalar_k else k1[:, nl:])
         else:
             f = flows.nozzle_f(x, k1)
+        if self.leak.model == "cfd-calibrated" and nl:
+            f[:, :nl] *= self._flow_coefficient(p1[:, :nl], r1[:, :nl], x[:, :nl], f[:, :nl])
         F = np.sqrt(p1 * r1) * f * area
         F = np.where(fwd, F, -F)
         if cou is not None:

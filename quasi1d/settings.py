@@ -30,7 +30,7 @@ AIR_MOLAR_MASS_G_MOL = 28.97  # seed 001, Table 3
 AIR_CP_J_KGK = 1006.43  # seed 001, Table 3
 R_UNIVERSAL = 8.314462618  # J/(mol K)
 
-LEAKAGE_MODELS = ("none", "nozzle", "fanno")
+LEAKAGE_MODELS = ("none", "nozzle", "fanno", "cfd-calibrated")
 PORT_MODELS = ("ideal", "nozzle")
 INTEGRATORS = ("auto", "dopri5", "bs3", "ros23", "radau", "bdf")
 
@@ -222,6 +222,10 @@ class Leakage:
     resistance ``zeta`` = f L_g / D_g + sum(xi), mass flow times ``coefficient``).
     ``wall_motion`` adds the Couette flow dragged through the interlobe gaps by the rotor
     surface (half the tip speed times the gap), from the older into the younger chamber.
+    "cfd-calibrated": the isentropic nozzle times the flow coefficient Cd(Re, PR, L/h)
+    fitted to the CFD leakage matrix (``correlation``: the fit's JSON file, written by the
+    cfd.leakage stage), with the land length ``land_mm`` of the sealing lines and the gas
+    viscosity ``viscosity_Pa_s`` for the gap Reynolds number.
     """
 
     gap_m: float = 0.0
@@ -231,8 +235,12 @@ class Leakage:
     # plus ~1.5 for the entry and exit losses -> ~2; seed 003 takes it as an input.
     zeta: float = 2.0
     wall_motion: bool = False
+    correlation: object = None  # a postprocess.leakage.FlowCoefficientFit
+    land_m: float = 1.0e-3
+    viscosity_Pa_s: float = 1.8e-5  # air near 300 K
 
-    KEYS = ("gap_um", "model", "coefficient", "zeta", "wall_motion")
+    KEYS = ("gap_um", "model", "coefficient", "zeta", "wall_motion", "correlation", "land_mm",
+            "viscosity_Pa_s")
 
     @classmethod
     def from_section(cls, d: dict, where: str = "the case") -> Leakage:
@@ -243,13 +251,43 @@ class Leakage:
         if model != "none" and gap <= 0:
             raise CaseError(f"key 'gap_um' in [{s}] of {where} must be positive for model "
                             f'"{model}", got {gap}')
+        fit = None
+        if model == "cfd-calibrated":
+            fit = _load_correlation(d, s, where)
+        elif "correlation" in d:
+            raise CaseError(f"key 'correlation' in [{s}] of {where} needs model "
+                            '"cfd-calibrated"')
         return cls(
             gap_m=gap * 1e-6,
             model=model,
             coefficient=_number(d, "coefficient", s, where, 1.0, positive=True),
             zeta=_number(d, "zeta", s, where, 2.0, positive=True),
             wall_motion=_bool(d, "wall_motion", s, where, False),
+            correlation=fit,
+            land_m=_number(d, "land_mm", s, where, 1.0, positive=True) * 1e-3,
+            viscosity_Pa_s=_number(d, "viscosity_Pa_s", s, where, 1.8e-5, positive=True),
         )
+
+
+def _load_correlation(d: dict, section: str, where: str):
+    """The CFD flow-coefficient fit named by ``correlation`` (relative to the case file)."""
+    from pathlib import Path
+
+    from rotorflow.postprocess.leakage import FlowCoefficientFit
+
+    name = d.get("correlation")
+    if not isinstance(name, str):
+        raise CaseError(f"key 'correlation' in [{section}] of {where} must name the fit's "
+                        "JSON file (model \"cfd-calibrated\")")
+    path = Path(name)
+    if not path.is_absolute() and Path(where).parent.is_dir():
+        path = Path(where).parent / path
+    if not path.is_file():
+        raise CaseError(f"flow-coefficient fit not found: {path} ([{section}] of {where})")
+    try:
+        return FlowCoefficientFit.from_json(path.read_text())
+    except (ValueError, KeyError, TypeError) as exc:
+        raise CaseError(f"malformed flow-coefficient fit {path}: {exc}") from None
 
 
 @dataclass(frozen=True)

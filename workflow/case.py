@@ -225,6 +225,11 @@ def validate_stage_sections(data: dict, path: Path) -> None:
             continue
         allowed = OPERATING_GEOMETRY_KEYS if name == "operating" else set()
         _check_keys(section, allowed, name, path)
-    for name in ("export", "outputs"):
-        if name in data:
-            raise CaseError(f"section [{name}] in {path} needs a stage this version lacks")
+    if "export" in data:  # owned by the solids stage
+        from rotorflow.geometry.export_settings import Export
+
+        Export.from_section(data["export"], str(path))
+    if "outputs" in data:  # the stages a case asks for (rotorflow run)
+        from rotorflow.workflow.stages import validate_outputs
+
+        validate_outputs(data["outputs"], path)

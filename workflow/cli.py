@@ -7,6 +7,7 @@ stderr and exit status 2, and nothing written.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -100,6 +101,92 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+def _log_setup(verbose: bool) -> None:
+    import logging
+
+    logging.basicConfig(level=logging.INFO if verbose else logging.WARNING,
+                        format="rotorflow: %(levelname)s: %(message)s")
+
+
+def cmd_run(args) -> int:
+    from rotorflow.workflow.runner import run_case
+
+    _log_setup(args.verbose)
+    width = 10
+
+    def show(name, entry):
+        if args.json or entry["status"] == "running":
+            return
+        secs = f"  {entry['seconds']:.2f} s" if "seconds" in entry else ""
+        print(f"{name:<{width}} {entry['status']}{secs}", flush=True)
+
+    force = tuple(args.force or ())
+    record = run_case(args.case, args.build, extra=args.want, force=force, on_stage=show)
+    if args.json:
+        print(json.dumps(record, indent=2))
+    failed = [(n, e) for n, e in record["stages"].items() if e["status"] == "failed"]
+    for name, entry in failed:
+        print(f"rotorflow: error: stage {name} failed: {entry['error']}", file=sys.stderr)
+    if failed:
+        return 2 if all(e.get("user_error") for _, e in failed) else 1
+    report = Path(record["build"]) / "report" / "index.html"
+    if "report" in record["plan"] and not args.json:
+        print(f"report: {report}")
+    return 0
+
+
+def cmd_sweep(args) -> int:
+    from rotorflow.workflow.sweep import run_sweep
+
+    _log_setup(args.verbose)
+    cluster = {"address": args.scheduler, "jobqueue": args.jobqueue, "workers": args.workers,
+               "jobs": args.jobs}
+    record = run_sweep(args.sweep, args.build, cluster=cluster, serial=args.serial,
+                       progress=not args.no_progress)
+    if args.json:
+        print(json.dumps(record, indent=2))
+    else:
+        print(f"sweep {Path(args.sweep).stem}: {record['points']} points, {record['ok']} run, "
+              f"{record['cached']} cached, {record['failed']} failed, {record['seconds']:.1f} s "
+              f"({record['where']})")
+        print(f"summary: {record['summary']}")
+        if record["report"]:
+            print(f"report: {record['report']}")
+    return 0
+
+
+def cmd_export(args) -> int:
+    from rotorflow.geometry.export import export
+    from rotorflow.geometry.export_settings import Export
+    from rotorflow.workflow.case import load_case
+
+    case = load_case(args.case)
+    # Without an [export] section: the two rotor STLs at the default tolerance.
+    settings = Export.from_section(case.raw.get("export", {"formats": ["stl"]}), str(args.case))
+    out = Path(args.out)
+    if out.exists() and (not out.is_dir() or (any(out.iterdir())
+                                              and not (out / "export.json").is_file())):
+        raise CaseError(f"{out} exists and is not a rotorflow export folder: not replacing it")
+    # Build in a temporary folder beside the target and rename it when complete; on
+    # failure remove it and any parent folder made for it, so nothing is left behind.
+    made = [p for p in reversed(out.absolute().parents) if not p.exists()]
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=".export-", dir=out.parent))
+    try:
+        export(case, settings, tmp)
+        if out.exists():
+            shutil.rmtree(out)
+        os.replace(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        for p in reversed(made):
+            with contextlib.suppress(OSError):
+                p.rmdir()
+        raise
+    print(out)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rotorflow", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"rotorflow {__version__}")
@@ -117,6 +204,38 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--json", action="store_true", help="one JSON object on stdout")
     q.add_argument("--traces", type=Path, help="folder for p, T, m traces (CSV) and plots")
     q.set_defaults(func=cmd_simulate)
+    x = sub.add_parser("export", help="rotor solids and machining files ([export] section)")
+    x.add_argument("case", type=Path)
+    x.add_argument("--out", type=Path, required=True, help="folder to write (replaced whole)")
+    x.set_defaults(func=cmd_export)
+    r = sub.add_parser("run", help="every stage the case asks for ([outputs]), skipping "
+                       "what is cached")
+    r.add_argument("case", type=Path)
+    r.add_argument("--build", type=Path, default=Path("build"),
+                   help="build folder (default: build); artifacts go to BUILD/<case>/<stage>/")
+    r.add_argument("--want", action="append", metavar="STAGE",
+                   help="also run this stage (repeatable), e.g. --want report")
+    r.add_argument("--force", action="append", metavar="STAGE",
+                   help="rerun this stage even if cached (repeatable; 'all' for every one)")
+    r.add_argument("--json", action="store_true", help="print the execution record as JSON")
+    r.add_argument("-v", "--verbose", action="store_true", help="log progress")
+    r.set_defaults(func=cmd_run)
+    w = sub.add_parser("sweep", help="run the points of a sweep file on Dask; summary CSV "
+                       "and report")
+    w.add_argument("sweep", type=Path)
+    w.add_argument("--build", type=Path, default=Path("build"),
+                   help="build folder (default: build); results go to BUILD/<sweep>/")
+    w.add_argument("--scheduler", metavar="ADDRESS", help="address of a running Dask scheduler")
+    w.add_argument("--jobqueue", metavar="KIND",
+                   help="a dask-jobqueue cluster: slurm, pbs, sge, lsf, htcondor, moab, oar")
+    w.add_argument("--jobs", type=int, help="jobqueue jobs to start")
+    w.add_argument("--workers", type=int, help="worker processes of the local cluster")
+    w.add_argument("--serial", action="store_true",
+                   help="run the points one after another in this process (no Dask)")
+    w.add_argument("--no-progress", action="store_true", help="no progress bar")
+    w.add_argument("--json", action="store_true", help="print the sweep record as JSON")
+    w.add_argument("-v", "--verbose", action="store_true", help="log progress")
+    w.set_defaults(func=cmd_sweep)
     return parser
 
 

@@ -1,0 +1,106 @@
+"""The built-in stages' functions: each writes its files into ``ctx.out``.
+
+They are thin: the work is done by the geometry, quasi-1D and report modules, which
+know nothing of caching.  See :mod:`rotorflow.workflow.stages` for the graph.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from collections import OrderedDict
+
+from .cache import StageContext, digest
+
+log = logging.getLogger(__name__)
+
+#: Machines kept in memory per process: the geometry and table stages of one case (and
+#: of consecutive sweep points on one worker) share one chamber computation.
+MACHINE_MEMO_SIZE = 4
+_machines: OrderedDict = OrderedDict()
+
+
+def _finite(obj):
+    """JSON has no NaN or infinity: write them as null."""
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite(v) for v in obj]
+    return obj
+
+
+def write_json(path, obj) -> None:
+    path.write_text(json.dumps(_finite(obj), indent=2) + "\n")
+
+
+def machine_of(ctx: StageContext):
+    """The case's machine (profile, chamber curves), computed once per process."""
+    from rotorflow.geometry.summary import build_machine
+
+    from .stages import GEOMETRY_READS, select
+
+    key = digest(select(ctx.raw, GEOMETRY_READS))
+    if key not in _machines:
+        _machines[key] = build_machine(ctx.case)
+        while len(_machines) > MACHINE_MEMO_SIZE:
+            _machines.popitem(last=False)
+    return _machines[key]
+
+
+def run_geometry(ctx: StageContext) -> dict:
+    from rotorflow.geometry.summary import geometry_figures
+
+    figures = geometry_figures(ctx.case, machine_of(ctx))
+    write_json(ctx.out / "geometry.json", figures)
+    return {"swept_volume_m3": figures["swept_volume_m3"], "driven": figures["driven"]}
+
+
+def run_table(ctx: StageContext) -> dict:
+    from rotorflow.geometry import table
+    from rotorflow.geometry.summary import chamber_table
+
+    tab = chamber_table(ctx.case, machine_of(ctx))
+    table.write(tab, ctx.out / "chamber_table.csv")
+    return {"rows": int(len(tab.angle_rad))}
+
+
+def run_quasi1d(ctx: StageContext) -> dict:
+    from rotorflow.geometry import table
+    from rotorflow.quasi1d import Leakage, Numerics, Operating, Ports, simulate
+
+    raw, where = ctx.raw, str(ctx.case_path)
+    tab = table.read(ctx.input("table") / "chamber_table.csv")
+    result = simulate(tab,
+                      Operating.from_section(raw["operating"], where),
+                      Leakage.from_section(raw.get("leakage", {}), where),
+                      Ports.from_section(raw.get("ports", {}), where),
+                      Numerics.from_section(raw.get("numerics", {}), where))
+    summary = result.summary()
+    write_json(ctx.out / "summary.json", summary)
+    result.write_traces(ctx.out)
+    result.plot(ctx.out)
+    if not result.converged:
+        log.warning("quasi-1D cycle of %s did not converge", ctx.case_path)
+    return {"converged": bool(summary.get("converged")),
+            "mass_flow_kg_s": summary.get("mass_flow_kg_s")}
+
+
+def run_render(ctx: StageContext) -> dict:
+    from rotorflow.postprocess.render import render_case
+
+    figures = json.loads((ctx.input("geometry") / "geometry.json").read_text())
+    files = render_case(ctx.case, ctx.out, wrap_outer_deg=figures["wrap_outer_deg"])
+    return {"images": [p.name for p in files]}
+
+
+def run_solids(ctx: StageContext) -> dict:
+    """Solids and machining files of the [export] section (as `rotorflow export`)."""
+    from rotorflow.geometry.export import export
+    from rotorflow.geometry.export_settings import Export
+
+    settings = Export.from_section(ctx.raw["export"], str(ctx.case_path))
+    export(ctx.case, settings, ctx.out)
+    return {"files": sorted(p.name for p in ctx.out.iterdir() if p.is_file())}

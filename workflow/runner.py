@@ -1,0 +1,166 @@
+"""`rotorflow run`: plan the stages a case asks for, skip what is cached, run the rest.
+
+The execution record ``<build>/<case>/run.json`` says, for every planned stage, whether
+it was ``executed``, ``cached`` (skipped: its artifact has the same key), ``failed`` or
+``blocked`` (an upstream stage failed); ``executed`` and ``skipped`` list the names.
+It is rewritten after every stage, so a killed run leaves ``"status": "running"``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import os
+import shutil
+import time
+import traceback
+from collections.abc import Callable
+from pathlib import Path
+
+from rotorflow import __version__
+from rotorflow.errors import RotorflowError
+
+from . import stages as st
+from .cache import CaseBuild, StageContext, code_hash, read_stamp, seal, stage_key
+
+log = logging.getLogger(__name__)
+
+DEFAULT_BUILD = Path("build")
+
+
+class StageFailed(RotorflowError):
+    """A stage raised; the message names the stage and its error."""
+
+
+def resolve(ref: str) -> Callable:
+    module, _, func = ref.partition(":")
+    return getattr(importlib.import_module(module), func)
+
+
+def _now() -> str:
+    return time.strftime("%Y-%m-%dT%H:%M:%S%z")
+
+
+def prepare(case_path: Path, extra: list[str] | None = None):
+    """Validate the case and plan its stages; CaseError (exit 2) on bad input."""
+    from .case import load_case
+
+    case = load_case(case_path)
+    want = st.wanted(case.raw, case_path, extra)
+    order = st.plan(case.raw, want, case_path)
+    return case, want, order
+
+
+def stage_keys(case, order: list[str], build: CaseBuild, fresh: set[str] = frozenset()):
+    """Key of every planned stage whose upstream is complete, as far as can be known.
+
+    A stage downstream of one that must run gets no key (None) until that one has run,
+    since its key depends on the new artifact's hash.
+    """
+    keys, hashes = {}, {}
+    for name in order:
+        stage = st.REGISTRY[name]
+        ups = st.upstream(name, order)
+        if any(hashes.get(u) is None for u in ups):
+            keys[name] = hashes[name] = None
+            continue
+        key = stage_key(name, stage.version, st.select(case.raw, stage.reads),
+                        {u: hashes[u] for u in ups}, code_hash(stage.code_modules))
+        keys[name] = key
+        stamp = build.stamp(name)
+        ok = stamp is not None and stamp["key"] == key and name not in fresh
+        hashes[name] = stamp["artifact_hash"] if ok else None
+    return keys, hashes
+
+
+def up_to_date(case_path: Path, root: Path = DEFAULT_BUILD,
+               extra: list[str] | None = None) -> bool:
+    """True when a run of the case would execute nothing (raises CaseError on bad input)."""
+    case, _, order = prepare(case_path, extra)
+    _, hashes = stage_keys(case, order, CaseBuild(Path(root), case.name))
+    return all(hashes[n] is not None for n in order)
+
+
+def run_case(case_path: Path, root: Path = DEFAULT_BUILD, extra: list[str] | None = None,
+             force: tuple[str, ...] = (), on_stage: Callable[[str, dict], None] | None = None,
+             keep_going: bool = True) -> dict:
+    """Run what ``case_path`` asks for under ``root``; return the execution record.
+
+    ``force`` names stages to rerun even if cached (``"all"``: every one).  A failing
+    stage blocks its downstream stages; independent ones go on (``keep_going``).
+    """
+    case_path = Path(case_path)
+    case, want, order = prepare(case_path, extra)
+    build = CaseBuild(Path(root), case.name)
+    forced = set(order) if "all" in force else set(force)
+    record = {
+        "case": str(case_path), "name": case.name, "rotorflow": __version__,
+        "build": str(build.folder), "pid": os.getpid(), "started": _now(),
+        "status": "running", "want": want, "plan": order,
+        "stages": {}, "executed": [], "skipped": [], "failed": [],
+    }
+    with build.lock():
+        build.clean_stale()
+        build.write_record(record)
+        hashes: dict[str, str | None] = {}
+        for name in order:
+            stage = st.REGISTRY[name]
+            ups = st.upstream(name, order)
+            entry: dict = {"upstream": ups}
+            record["stages"][name] = entry
+            bad = [u for u in ups if hashes.get(u) is None]
+            if bad:
+                entry.update(status="blocked", error=f"upstream stage {bad[0]} failed")
+                hashes[name] = None
+            else:
+                key = stage_key(name, stage.version, st.select(case.raw, stage.reads),
+                                {u: hashes[u] for u in ups}, code_hash(stage.code_modules))
+                entry["key"] = key
+                stamp = build.stamp(name)
+                if stamp is not None and stamp["key"] == key and name not in forced:
+                    entry.update(status="cached", artifact_hash=stamp["artifact_hash"])
+                    hashes[name] = stamp["artifact_hash"]
+                    record["skipped"].append(name)
+                else:
+                    if on_stage:
+                        on_stage(name, {"status": "running"})
+                    hashes[name] = _execute(case, case_path, stage, key, ups, build, entry)
+                    record["executed" if hashes[name] else "failed"].append(name)
+            if on_stage:
+                on_stage(name, entry)
+            build.write_record(record)
+            if hashes[name] is None and not keep_going:
+                break
+        record["status"] = "failed" if record["failed"] else "complete"
+        record["finished"] = _now()
+        build.write_record(record)
+    return record
+
+
+def _execute(case, case_path, stage: st.Stage, key: str, ups: list[str], build: CaseBuild,
+             entry: dict) -> str | None:
+    """Run one stage into a temporary folder and move it into place; the artifact hash."""
+    tmp = build.new_tmp(stage.name)
+    ctx = StageContext(stage=stage.name, case_path=case_path, raw=case.raw, out=tmp,
+                       inputs={u: build.artifact(u) for u in ups}, _case=case)
+    t0 = time.perf_counter()
+    try:
+        summary = resolve(stage.run)(ctx) or {}
+        seconds = time.perf_counter() - t0
+        seal(tmp, stage.name, key, {"seconds": round(seconds, 3), "summary": summary,
+                                    "upstream": ups})
+        build.commit(tmp, stage.name)
+    except Exception as exc:  # noqa: BLE001 - recorded, and reported by the caller
+        shutil.rmtree(tmp, ignore_errors=True)
+        entry.update(status="failed", seconds=round(time.perf_counter() - t0, 3),
+                     error=str(exc) if isinstance(exc, RotorflowError)
+                     else f"{type(exc).__name__}: {exc}",
+                     user_error=isinstance(exc, RotorflowError))
+        if not isinstance(exc, RotorflowError):
+            entry["traceback"] = traceback.format_exc()
+        log.info("stage %s of %s failed: %s", stage.name, case.name, exc)
+        return None
+    stamp = read_stamp(build.artifact(stage.name))
+    entry.update(status="executed", seconds=round(seconds, 3),
+                 artifact_hash=stamp["artifact_hash"])
+    return stamp["artifact_hash"]

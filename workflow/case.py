@@ -30,7 +30,9 @@ MACHINE_KEYS = {
 SWEEP_KEYS = {"kind", "wrap_outer_deg", "wrap_bar", "diameter_end_mm", "lead_ratio"}
 #: [operating] keys the geometry reads; the quasi-1D stage owns the others.
 OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven"}
-SECTIONS = {"machine", "sweep", "operating", "leakage", "ports", "numerics", "export", "outputs"}
+SECTIONS = {
+    "machine", "sweep", "operating", "leakage", "ports", "numerics", "export", "outputs", "cfd",
+}
 
 
 @dataclass(frozen=True)
@@ -229,6 +231,12 @@ def validate_stage_sections(data: dict, path: Path) -> None:
         from rotorflow.geometry.export_settings import Export
 
         Export.from_section(data["export"], str(path))
+    if "cfd" in data:  # owned by the CFD leakage stage
+        from rotorflow.cases.gap_study import matrix_from_section
+
+        if not isinstance(data["cfd"], dict):
+            raise CaseError(f"[cfd] in {path} must be a table")
+        matrix_from_section(data["cfd"], str(path))
     if "outputs" in data:  # the stages a case asks for (rotorflow run)
         from rotorflow.workflow.stages import validate_outputs
 

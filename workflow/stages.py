@@ -267,15 +267,23 @@ register(Stage(
     missing=_has_export,
     default=lambda raw: "export" in raw,
 ))
-# CFD stages go here, e.g.
-#   register(Stage(name="cfd.leakage", run="rotorflow.cases.gap_study:run_stage",
-#                  description="...", reads=("machine", "leakage", "cfd"), needs=("table",),
-#                  code=("rotorflow.cases", "rotorflow.postprocess.leakage"),
-#                  report="rotorflow.postprocess.leakage:report_section",
-#                  figures="errors.json",
-#                  missing=lambda raw: None if "cfd" in raw else "it has no [cfd] section",
-#                  default=lambda raw: "cfd" in raw))
-# and the report picks them up through `after=("*",)`.
+def _has_cfd(raw: dict) -> str | None:
+    return None if "cfd" in raw else "it has no [cfd] section"
+
+
+register(Stage(
+    name="cfd.leakage",
+    run="rotorflow.cases.gap_study:run_stage",
+    description="OpenFOAM leakage matrix, Richardson studies, quasi-1D comparison, Cd fit",
+    # The matrix is generic (gap, pressure ratio, wall radius, wall speed): it reads only
+    # [cfd]; its runs are reused point by point through [cfd] runs_dir.
+    reads=("cfd",),
+    code=("rotorflow.cases", "rotorflow.postprocess.leakage", "rotorflow.quasi1d.flows"),
+    report="rotorflow.postprocess.leakage:report_section",
+    report_rank=60,
+    missing=_has_cfd,
+    default=lambda raw: "cfd" in raw,
+))
 register(Stage(
     name="report",
     run=f"{_REPORT}:run_report",

@@ -1,0 +1,37 @@
+"""The CFD leakage stage as a workflow stage: case validation and registration."""
+
+import subprocess
+import sys
+
+import pytest
+
+from rotorflow.errors import CaseError
+from rotorflow.workflow.case import load_case
+from rotorflow.workflow.stages import REGISTRY
+
+from .conftest import CASES
+
+
+def test_cfd_case_loads_and_its_stage_is_registered():
+    case = load_case(CASES / "cfd_leakage.toml")
+    assert case.raw["cfd"]["gap_um"] == [10, 50]
+    stage = REGISTRY["cfd.leakage"]
+    assert stage.reads == ("cfd",)  # the generic matrix does not depend on the machine
+    assert stage.missing({}) and stage.missing(case.raw) is None
+
+
+@pytest.mark.parametrize("old, new, word", [
+    ("gap_um = [10, 50]", "gap_um = [10, 50]\nmesh = 3", "mesh"),
+    ("gap_um = [10, 50]", "gap_um = [-10]", "gaps"),
+    ("pressure_ratio = [1.2, 2.0, 4.0]", "pressure_ratio = 2.0", "list"),
+])
+def test_bad_cfd_section_exits_2_with_one_line(tmp_path, old, new, word):
+    case = tmp_path / "case.toml"
+    case.write_text((CASES / "cfd_leakage.toml").read_text().replace(old, new))
+    with pytest.raises(CaseError, match=word):
+        load_case(case)
+    out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", "run", str(case),
+                          "--build", str(tmp_path / "build")], capture_output=True, text=True)
+    assert out.returncode == 2
+    assert len(out.stderr.strip().splitlines()) == 1 and word in out.stderr
+    assert not (tmp_path / "build").exists()

@@ -15,7 +15,7 @@ PYTEST_ARGS ?=
 
 -include mk/*.mk
 
-.PHONY: help venv demo test lint bench case sweep report clean
+.PHONY: help venv demo test lint bench case sweep report clean export
 
 help: ## list the targets
 	@grep -hE '^[a-zA-Z_-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  %-10s %s\n", $$1, $$2}'
@@ -39,6 +39,9 @@ sweep: $(STAMP) ## run a sweep on a local Dask cluster: make sweep SWEEP=cases/l
 
 report: $(STAMP) ## HTML report of a case (build/<case>/report/index.html): make report CASE=...
 	$(VENV)/bin/rotorflow run $(CASE) --want report
+
+export: $(STAMP) ## solids and machining files of a case: make export CASE=... (into build/<case>/export)
+	$(VENV)/bin/rotorflow export $(CASE) --out build/$(basename $(notdir $(CASE)))/export
 
 test: $(STAMP) openfoam ## set up, then run the tests (all tiers but slow)
 	$(PY) -m pytest -m "not slow" $(PYTEST_ARGS)

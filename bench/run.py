@@ -8,7 +8,12 @@ import sys
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent / "results"
-MODULES = ("bench.bench_geometry", "bench.bench_quasi1d", "bench.bench_cfd")
+MODULES = (
+    "bench.bench_geometry",
+    "bench.bench_quasi1d",
+    "bench.bench_solids",
+    "bench.bench_cfd",
+)
 
 
 def main() -> int:

@@ -423,19 +423,18 @@ def offset_profile(base: Profile, clearance: Clearance, direction: int):
     u = (np.arange(base.n)[:, None] + np.linspace(0.0, 1.0, 4 * PREGRID)[None, :]).ravel()
     u = np.minimum(u, base.n - 1e-12)
     kappa = base.curvature(u)
-    worst = int(np.argmin(1.0 + direction * off.offset(u) * kappa))
+    worst = int(np.argmin(1.0 + off.offset(u) * kappa))
     h = 1.0 / (4 * PREGRID)
     fine = np.clip(u[worst] + np.linspace(-h, h, 2001), 0.0, base.n - 1e-12)
     kf = base.curvature(fine)
-    fold = 1.0 + direction * off.offset(fine) * kf
+    fold = 1.0 + off.offset(fine) * kf
     i = int(np.argmin(fold))
     if not fold[i] > 0.0:
         radius = 1.0 / abs(kf[i]) if kf[i] != 0 else math.inf
         p = base.point(fine[i])
-        side = "convex" if direction * kf[i] < 0 else "concave"
         raise CaseError(
             f"a clearance of {abs(off.offset(fine[i])) * 1e6:.3g} um on the {base.name} rotor "
-            f"folds its profile: the {side} radius there is {radius * 1e6:.3g} um, at "
+            f"folds its profile: its radius of curvature there is {radius * 1e6:.3g} um, at "
             f"({p[0] * 1e3:.3f}, {p[1] * 1e3:.3f}) mm"
             + ("; apply the clearance to the outer rotor" if base.material_inside else "")
         )

@@ -24,7 +24,8 @@ then measured against the analytic surface (Gauss-Newton foot points), and the m
 rebuilt finer if any is farther than the tolerance.
 
 Meshes are indexed (shared vertices), closed, consistently oriented (outward normals)
-and checked with trimesh and manifold3d; nothing is ever repaired.
+and checked as they are (every directed edge paired with its reverse, and manifold3d's
+own checks; trimesh's too on request); nothing is ever merged or repaired.
 """
 
 from __future__ import annotations
@@ -191,9 +192,6 @@ class FlankGrid:
     @property
     def shape(self):
         return self.vertices.shape[:2]
-
-    def row(self, j: int) -> np.ndarray:
-        return self.vertices[j]
 
     def measure(self) -> dict:
         """Largest distance to the analytic flank of vertices, edge midpoints, centroids."""

@@ -1,0 +1,330 @@
+"""Form (disc) cutter for the externally toothed (inner) rotor of a helical pair.
+
+The rotor flank is a helical surface of constant lead; in the rotor's own frame (origin
+on its axis, z along it)
+
+    P(u, z) = R(-k z) p(u) + z e_z,     k = m21 wrap / L  [rad/m]
+
+with ``p`` the transverse profile turned so that the tooth space being cut faces +x
+(its root, g = 0, on +x; u from -1/2 to 1/2 runs tip to tip).  The tool is a surface of
+revolution about the axis through ``(C, 0, 0)`` with direction
+``e_t = (0, cos S, sin S)``: C the centre distance, S the setting angle (tan S = k r gives
+a disc plane along the helix at radius r).
+
+Contact condition (forward): a surface of revolution touches the helical surface
+along the curve where the rotor's normal meets the tool axis,
+``(P - O_t) . (n x e_t) = 0``.  For every profile point u it is solved for z; the tool
+profile (meridian) is then the axial position ``h = (P - O_t) . e_t`` and the radius
+``R = |P - O_t - h e_t|`` of the contact point.
+
+Round trip (inverse): the rotor is the envelope of the tool under the helical motion
+whose velocity field is ``v = k e_z x X - e_z``; on each tool circle h the contact is
+where the tool normal is orthogonal to v.  Screwing that point back to z = 0,
+``q = R(k z) (x, y)``, regenerates the transverse profile, which must match ``p``
+within the tolerance.  A tool point whose screw image lies inside the rotor material
+would cut it (interference); the images of the tool surface are checked as well.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from rotorflow.errors import CaseError
+
+from .profile_curves import closest, sample
+
+#: Samples of the bracket scan of the contact equations, and bisection steps after it
+#: (2^-60 of the bracket: machine precision).
+SCAN = 801
+BISECT = 60
+#: Smallest spacing of written tool points, in tolerances.
+MIN_SPACING = 0.01
+#: Tool angles scanned (rad either side of the plane through both axes) when looking for
+#: interference.
+INTERFERENCE_SPAN = 0.6
+
+
+@dataclass(frozen=True)
+class CutterSetup:
+    setting_angle: float  # S [rad]
+    centre_distance: float  # C [m]
+    k: float  # rotor twist rate [rad/m], right-handed positive; 0 for a straight rotor
+
+    @property
+    def origin(self) -> np.ndarray:
+        return np.array([self.centre_distance, 0.0, 0.0])
+
+    @property
+    def axis(self) -> np.ndarray:
+        return np.array([0.0, math.cos(self.setting_angle), math.sin(self.setting_angle)])
+
+
+class _Turned:
+    """The rotor profile turned so that the root of lobe 0 faces +x (rotor frame)."""
+
+    def __init__(self, curve):
+        self.curve = curve
+        root = curve.point(np.array([0.0]))[0]
+        self.turn = -math.atan2(root[1], root[0])
+        self.c, self.s = math.cos(self.turn), math.sin(self.turn)
+        self.n = curve.n
+        self.name = curve.name
+
+    def _r(self, v):
+        return np.stack([self.c * v[..., 0] - self.s * v[..., 1],
+                         self.s * v[..., 0] + self.c * v[..., 1]], -1)
+
+    def point(self, u):
+        return self._r(self.curve.point(u))
+
+    def derivative(self, u):
+        return self._r(self.curve.derivative(u))
+
+    def normal(self, u):
+        return self._r(self.curve.normal(u))
+
+
+def _helix(p, dp, z, k):
+    """P, P_u, P_z of the helical flank (arrays over u, z broadcast)."""
+    c, s = np.cos(-k * z), np.sin(-k * z)
+    x = c * p[..., 0] - s * p[..., 1]
+    y = s * p[..., 0] + c * p[..., 1]
+    P = np.stack([x, y, z * np.ones_like(x)], -1)
+    Pu = np.stack([c * dp[..., 0] - s * dp[..., 1], s * dp[..., 0] + c * dp[..., 1],
+                   np.zeros_like(x)], -1)
+    Pz = np.stack([k * y, -k * x, np.ones_like(x)], -1)
+    return P, Pu, Pz
+
+
+def _bisect(f, lo, hi, flo):
+    """Vectorised bisection of f on brackets [lo, hi] with f(lo) = flo."""
+    for _ in range(BISECT):
+        mid = 0.5 * (lo + hi)
+        fm = f(mid)
+        left = np.sign(fm) == np.sign(flo)
+        lo = np.where(left, mid, lo)
+        flo = np.where(left, fm, flo)
+        hi = np.where(left, hi, mid)
+    return 0.5 * (lo + hi)
+
+
+def _roots(f, span: float, n: int):
+    """Every root of f(t) in [-span, span] the scan brackets, for n problems at once.
+
+    Returns (n, m) roots, NaN-padded, m the most sign changes of any problem.
+    """
+    t = np.linspace(-span, span, SCAN)
+    vals = np.stack([f(np.full(n, ti)) for ti in t], -1)  # (n, SCAN)
+    change = np.sign(vals[:, :-1]) * np.sign(vals[:, 1:]) <= 0.0
+    m = int(change.sum(1).max()) if change.any() else 0
+    out = np.full((n, max(m, 1)), np.nan)
+    if m == 0:
+        return out
+    rows, cols = np.nonzero(change)
+    slot = np.concatenate([np.arange(c) for c in np.bincount(rows, minlength=n)])
+    lo, hi = t[cols], t[cols + 1]
+
+    def fr(x):
+        return _pick(f, x, rows, n)
+
+    out[rows, slot] = _bisect(fr, lo.astype(float), hi.astype(float), vals[rows, cols])
+    return out
+
+
+def _pick(f, x, rows, n):
+    """f evaluated for problems ``rows`` at their own x (f is vectorised over n)."""
+    res = np.empty(len(x))
+    order = np.argsort(rows, kind="stable")
+    r, xs = rows[order], x[order]
+    # evaluate in layers: each layer has at most one entry per problem
+    layer = np.concatenate([np.arange(c) for c in np.bincount(r, minlength=n)])
+    for k in range(int(layer.max()) + 1):
+        sel = layer == k
+        full = np.zeros(n)
+        full[r[sel]] = xs[sel]
+        res[order[sel]] = f(full)[r[sel]]
+    return res
+
+
+def _nearest_zero(roots, valid):
+    """Per problem, the valid root of smallest |t| (NaN if none)."""
+    score = np.where(valid & np.isfinite(roots), np.abs(roots), np.inf)
+    j = np.argmin(score, axis=1)
+    best = roots[np.arange(len(roots)), j]
+    return np.where(np.isfinite(score[np.arange(len(roots)), j]), best, np.nan)
+
+
+@dataclass(frozen=True)
+class Cutter:
+    setup: CutterSetup
+    u: np.ndarray  # rotor profile parameters (tooth space, tip to tip)
+    contact: np.ndarray  # (n, 3) contact points on the rotor, rotor frame
+    axial: np.ndarray  # h: position along the tool axis
+    radius: np.ndarray  # R: tool radius
+    turn: float  # rotation applied to the profile (root of lobe 0 on +x)
+
+
+def form_cutter(curve, setup: CutterSetup, tol: float) -> Cutter:
+    """The tool profile generating the tooth space of ``curve`` (inner profile, S2)."""
+    prof = _Turned(curve)
+    us = sample(curve, 0.1 * tol)
+    us = np.where(us > 0.5 * curve.n, us - curve.n, us)
+    u = np.sort(us[(us >= -0.5) & (us <= 0.5)])
+    u = np.unique(np.concatenate([[-0.5], u, [0.5]]))
+    p, dp = prof.point(u), prof.derivative(u)
+    o, e = setup.origin, setup.axis
+    k = setup.k
+    radius = float(np.linalg.norm(p, axis=-1).max())
+    span = radius if k == 0.0 else min(0.5 * math.pi / abs(k), 4.0 * radius)
+
+    def f(z):
+        P, Pu, Pz = _helix(p, dp, z, k)
+        n = np.cross(Pu, Pz)
+        return np.sum((P - o) * np.cross(n, e), -1)
+
+    roots = _roots(f, span, len(u))
+    # A root is a contact only where the rotor's outward normal runs to the tool axis
+    # (the normal line meets it in front of the flank, not through the rotor).
+    valid = np.zeros(roots.shape, dtype=bool)
+    for j in range(roots.shape[1]):
+        zj = np.nan_to_num(roots[:, j])
+        P, Pu, Pz = _helix(p, dp, zj, k)
+        n = np.cross(Pu, Pz)
+        ne = np.cross(n, e)
+        lam = -np.sum(np.cross(P - o, e) * ne, -1) / np.maximum(np.sum(ne * ne, -1), 1e-300)
+        valid[:, j] = lam > 0.0
+    z = _nearest_zero(roots, valid)
+    if np.isnan(z).any():
+        i = int(np.nonzero(np.isnan(z))[0][0])
+        raise CaseError(
+            f"no contact between the form cutter and the inner rotor at profile point "
+            f"({p[i, 0] * 1e3:.3f}, {p[i, 1] * 1e3:.3f}) mm: change "
+            "cutter_setting_angle_deg or cutter_centre_distance_mm")
+    P, _, _ = _helix(p, dp, z, k)
+    d = P - o
+    h = d @ e
+    R = np.linalg.norm(d - h[:, None] * e, axis=-1)
+    if not (R > 0.0).all():
+        raise CaseError("the form cutter's axis passes through the inner rotor: increase "
+                        "cutter_centre_distance_mm")
+    # Near the sigma_bar = 1 point the flank barely moves with u: drop tool points
+    # closer than MIN_SPACING * tol to the last one kept (they carry no shape).
+    keep = [0]
+    for i in range(1, len(u)):
+        if math.hypot(h[i] - h[keep[-1]], R[i] - R[keep[-1]]) > MIN_SPACING * tol:
+            keep.append(i)
+    if keep[-1] != len(u) - 1:
+        keep[-1] = len(u) - 1
+    keep = np.array(keep)
+    return Cutter(setup, u[keep], P[keep], h[keep], R[keep], prof.turn)
+
+
+def _meridian(axial, radius):
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(axial), np.diff(radius)))])
+    if not np.all(np.diff(s) > 0.0):
+        raise CaseError("the form-cutter profile has repeated points")
+    return s, CubicSpline(s, axial), CubicSpline(s, radius)
+
+
+def _frame(setup: CutterSetup):
+    e = setup.axis
+    a = np.array([-1.0, 0.0, 0.0])  # from the tool axis toward the rotor axis
+    b = np.cross(e, a)
+    return e, a, b
+
+
+def _tool_points(setup, h, R, psi):
+    e, a, b = _frame(setup)
+    er = np.cos(psi)[..., None] * a + np.sin(psi)[..., None] * b
+    return setup.origin + h[..., None] * e + R[..., None] * er, er
+
+
+def _to_transverse(T, k):
+    c, s = np.cos(k * T[..., 2]), np.sin(k * T[..., 2])
+    return np.stack([c * T[..., 0] - s * T[..., 1], s * T[..., 0] + c * T[..., 1]], -1)
+
+
+def regenerate(setup: CutterSetup, axial, radius, refine: int = 2):
+    """Transverse rotor points enveloped by the tool profile (h, R) (rotor frame, turned).
+
+    The meridian is a cubic spline through the given points by chord length; it is
+    evaluated at the points and ``refine - 1`` points between each pair, so that the
+    interpolation between the written points is checked too.  Returns (s, points).
+    """
+    s_nodes, hs, Rs = _meridian(np.asarray(axial, float), np.asarray(radius, float))
+    s = np.concatenate([np.linspace(a, b, refine, endpoint=False)
+                        for a, b in zip(s_nodes[:-1], s_nodes[1:], strict=True)]
+                       + [s_nodes[-1:]])
+    h, R = hs(s), Rs(s)
+    dh, dR = hs(s, 1), Rs(s, 1)
+    e, _, _ = _frame(setup)
+    k = setup.k
+
+    def g(psi):
+        T, er = _tool_points(setup, h, R, psi)
+        n = dh[:, None] * er - dR[:, None] * e
+        v = k * np.cross(np.array([0.0, 0.0, 1.0]), T) - np.array([0.0, 0.0, 1.0])
+        return np.sum(n * v, -1)
+
+    roots = _roots(g, 0.5 * math.pi, len(s))
+    psi = _nearest_zero(roots, np.isfinite(roots))
+    if np.isnan(psi).any():
+        raise CaseError("the form-cutter profile does not envelope a rotor flank everywhere")
+    T, _ = _tool_points(setup, h, R, psi)
+    return s, _to_transverse(T, k)
+
+
+def round_trip(curve, cutter: Cutter, axial=None, radius=None) -> dict:
+    """Regenerate the rotor profile from the tool profile (as written, if given) and
+    measure it against the analytic profile; also the deepest tool cut into the rotor."""
+    prof = _Turned(curve)
+    axial = cutter.axial if axial is None else np.asarray(axial, float)
+    radius = cutter.radius if radius is None else np.asarray(radius, float)
+    s, q = regenerate(cutter.setup, axial, radius)
+    s_nodes = _meridian(axial, radius)[0]
+    u0 = np.interp(s, s_nodes, cutter.u)
+    _, dist, _ = closest(prof, q, u0, iterations=12)
+    return {"round_trip_max_m": float(dist.max()), "round_trip_points": int(len(q)),
+            "interference_m": interference(prof, cutter.setup, axial, radius)}
+
+
+def interference(prof, setup: CutterSetup, axial, radius, n_psi: int = 121) -> float:
+    """Deepest penetration of the tool surface's screw image into the rotor (>= 0)."""
+    from matplotlib.path import Path as MplPath
+
+    s_nodes, hs, Rs = _meridian(axial, radius)
+    s = np.linspace(0.0, s_nodes[-1], 4 * len(s_nodes))
+    psi = np.linspace(-INTERFERENCE_SPAN, INTERFERENCE_SPAN, n_psi)
+    S, PSI = np.meshgrid(s, psi)
+    T, _ = _tool_points(setup, hs(S), Rs(S), PSI)
+    q = _to_transverse(T, setup.k).reshape(-1, 2)
+    u = sample(prof.curve, 1e-7)
+    poly = prof.point(u)
+    near = np.linalg.norm(q, axis=-1) <= np.linalg.norm(poly, axis=-1).max()
+    q = q[near]
+    if not len(q):
+        return 0.0
+    inside = MplPath(poly).contains_points(q)
+    if not inside.any():
+        return 0.0
+    from scipy.spatial import cKDTree
+
+    _, i = cKDTree(poly).query(q[inside])
+    _, dist, _ = closest(prof, q[inside], u[i], iterations=12)
+    return float(dist.max())
+
+
+def default_setup(pair, sweep, angle: float | None, centre: float | None) -> CutterSetup:
+    """The cutter of a helical (or straight) inner rotor; conical rotors have none."""
+    if sweep.kind == "conical" or abs(sweep.lead_ratio - 1.0) > 1e-12:
+        raise CaseError("a form cutter needs a rotor of constant section and lead "
+                        "(straight or helical sweep); this rotor is conical")
+    k = pair.m21 * sweep.wrap / sweep.length
+    r_pitch = pair.lobes_inner * pair.E
+    if angle is None:
+        angle = math.atan(k * r_pitch)
+    return CutterSetup(angle, pair.diameter if centre is None else centre, k)

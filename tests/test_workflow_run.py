@@ -18,7 +18,7 @@ import pytest
 
 from .conftest import CASES
 
-DEMO_PLAN = ["geometry", "table", "quasi1d", "render", "report"]
+DEMO_PLAN = ["geometry", "table", "quasi1d", "render", "solids", "report"]
 
 
 def rotorflow(*args, env=None, **kw):
@@ -87,7 +87,7 @@ def test_discharge_pressure_reruns_only_what_depends_on_it(tmp_path):
     assert out.returncode == 0, out.stderr
     second = record(build, "demo")
     assert second["executed"] == ["quasi1d", "report"]
-    assert second["skipped"] == ["geometry", "table", "render"]
+    assert second["skipped"] == ["geometry", "table", "render", "solids"]
     assert second["stages"]["quasi1d"]["key"] != first["stages"]["quasi1d"]["key"]
     summary = json.loads((build / "demo" / "quasi1d" / "summary.json").read_text())
     # A higher discharge pressure takes more work per kg: the rerun really used 3.0 bar.
@@ -257,7 +257,7 @@ def test_real_stage_killed_mid_way(tmp_path):
     out = rotorflow("run", case, "--build", build)
     assert out.returncode == 0, out.stderr
     rec = record(build, "demo")
-    assert rec["executed"] == ["render", "report"]
+    assert rec["executed"] == ["render", "solids", "report"]
     assert rec["skipped"] == ["geometry", "table", "quasi1d"]
     assert (folder / "render" / "rotors.png").stat().st_size > 0
 
@@ -266,8 +266,7 @@ def test_solids_stage_ignores_the_operating_point(tmp_path):
     """Solids come from [export]; the discharge pressure does not rebuild them."""
     pytest.importorskip("rotorflow.geometry.export", reason="solids export not yet landed")
     build = tmp_path / "build"
-    extra = ('\n[export]\nformats = ["stl"]\ntolerance_um = 50\n'
-             '\n[outputs]\nwant = ["solids"]\n')
+    extra = '\n[outputs]\nwant = ["solids"]\n'  # the demo case has an [export] section
     case = case_copy(tmp_path, extra=extra)
     out = rotorflow("run", case, "--build", build)
     assert out.returncode == 0, out.stderr

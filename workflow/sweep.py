@@ -74,7 +74,7 @@ JOBQUEUE = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster",
             "oar": "OARCluster"}
 #: Stages a sweep point runs by default are the base case's defaults without these
 #: (pictures of every point are rarely wanted and cost seconds each).
-SWEEP_SKIPS = ("render", "report")
+SWEEP_SKIPS = ("render", "solids", "report")
 #: Seconds to wait for a named scheduler before giving up.
 SCHEDULER_TIMEOUT_S = 20
 #: Characters of the value hash naming a point (1e-12 collision odds at 1e3 points).

@@ -695,5 +695,10 @@ _DIVERGENCE = re.compile(
 
 
 def looks_diverged(log_text: str) -> bool:
-    """True when a solver log shows the solution blowing up (FPE trap, nan, runaway T)."""
-    return _DIVERGENCE.search(log_text) is not None
+    """True when a solver log shows the solution blowing up (FPE trap, nan, runaway T).
+
+    The banner line ``trapFpe: Floating point exception trapping enabled`` that starts
+    every log is left out: a run that fails in its first lines has not diverged.
+    """
+    text = "\n".join(ln for ln in log_text.splitlines() if not ln.startswith("trapFpe"))
+    return _DIVERGENCE.search(text) is not None

@@ -32,6 +32,7 @@ SWEEP_KEYS = {"kind", "wrap_outer_deg", "wrap_bar", "diameter_end_mm", "lead_rat
 OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven"}
 SECTIONS = {
     "machine", "sweep", "operating", "leakage", "ports", "numerics", "export", "outputs", "cfd",
+    "cfd_chamber",
 }
 
 
@@ -237,6 +238,12 @@ def validate_stage_sections(data: dict, path: Path) -> None:
         if not isinstance(data["cfd"], dict):
             raise CaseError(f"[cfd] in {path} must be a table")
         matrix_from_section(data["cfd"], str(path))
+    if "cfd_chamber" in data:  # owned by the CFD chamber stage
+        from rotorflow.cases.chamber_case import ChamberSettings
+
+        if not isinstance(data["cfd_chamber"], dict):
+            raise CaseError(f"[cfd_chamber] in {path} must be a table")
+        ChamberSettings.from_section(data["cfd_chamber"], str(path))
     if "outputs" in data:  # the stages a case asks for (rotorflow run)
         from rotorflow.workflow.stages import validate_outputs
 

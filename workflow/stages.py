@@ -284,6 +284,28 @@ register(Stage(
     missing=_has_cfd,
     default=lambda raw: "cfd" in raw,
 ))
+def _has_cfd_chamber(raw: dict) -> str | None:
+    if "cfd_chamber" not in raw:
+        return "it has no [cfd_chamber] section"
+    return _needs_operating_point(raw)
+
+
+register(Stage(
+    name="cfd.chamber",
+    run="rotorflow.cases.chamber_case:run_stage",
+    description="OpenFOAM compression of one leaking chamber against the quasi-1D models",
+    reads=("machine", "sweep", "operating", "leakage", "cfd_chamber"),
+    needs=("table",),
+    # Uses the cfd.leakage stage's fitted flow coefficient when that stage runs too.
+    after=("cfd.leakage",),
+    code=("rotorflow.cases", "rotorflow.postprocess.chamber_compare",
+          "rotorflow.postprocess.leakage", "rotorflow.quasi1d"),
+    report="rotorflow.postprocess.chamber_compare:report_section",
+    report_rank=70,
+    figures="chamber_figures.json",
+    missing=_has_cfd_chamber,
+    default=lambda raw: "cfd_chamber" in raw,
+))
 register(Stage(
     name="report",
     run=f"{_REPORT}:run_report",

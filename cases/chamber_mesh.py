@@ -43,7 +43,7 @@ import numpy as np
 from rotorflow.errors import CaseError
 
 from . import foam
-from .gap_mesh import SPLINE_POINTS, THROAT_END_MARGIN, GapMeshSpec, GapWalls
+from .gap_mesh import GapMeshSpec, GapWalls, gap_blocks
 from .gmsh_session import gmsh_session
 
 WALL_PATCHES = ("piston", "sideWalls", "bottomWall", "gapWalls")
@@ -310,64 +310,12 @@ def _gap_blocks(geo, domain: ChamberDomain, gspec: GapMeshSpec):
     Returns the blocks as (surface, patch of each loop edge) and the two inlet lines as
     ((lower point, lower->mid line), (mid->upper line, upper point)).
     """
-    walls = domain.walls
-    xt = walls.throat_x
-    margin = THROAT_END_MARGIN * walls.length
-    if not walls.x_inlet + margin < xt < walls.x_outlet - margin:
-        raise CaseError("the minimum gap lies at an end of the walls; extend them past the "
-                        "sealing line")
-    n_half, n_along = gspec.half_cells_across, gspec.cells_along_refined
-    q_across = gspec.across_rate
-    q_along = gspec.along_rates(xt - walls.x_inlet, walls.x_outlet - xt)
-
-    def y_mid(x):
-        return 0.5 * (walls.y_lower(x) + walls.y_upper(x))
-
-    walls_y = {"lower": walls.y_lower, "mid": y_mid, "upper": walls.y_upper}
-    stations = {"in": walls.x_inlet, "throat": xt, "out": walls.x_outlet}
-
-    def point(xg: float, yg: float) -> int:
-        X, Y = domain.to_plane(xg, yg)
-        return geo.addPoint(float(X), float(Y), 0.0)
-
-    corner = {(w, s): point(x, float(walls_y[w](x))) for w in walls_y
-              for s, x in stations.items()}
-
-    def wall_piece(w: str, s0: str, s1: str) -> int:
-        x = np.linspace(stations[s0], stations[s1], SPLINE_POINTS)
-        y = walls_y[w](x)
-        inner = [point(float(a), float(b)) for a, b in zip(x[1:-1], y[1:-1], strict=True)]
-        return geo.addSpline([corner[w, s0], *inner, corner[w, s1]])
-
-    along = {(w, side): wall_piece(w, *ends) for w in walls_y
-             for side, ends in (("up", ("in", "throat")), ("down", ("throat", "out")))}
-    across = {(s, half): geo.addLine(corner[lo, s], corner[hi, s])
-              for s in stations for half, (lo, hi) in (("lower", ("lower", "mid")),
-                                                       ("upper", ("mid", "upper")))}
-    for (_, side), c in along.items():
-        geo.mesh.setTransfiniteCurve(c, n_along + 1, "Progression",
-                                     1 / q_along[0] if side == "up" else q_along[1])
-    for (_, half), c in across.items():
-        geo.mesh.setTransfiniteCurve(c, n_half + 1, "Progression",
-                                     q_across if half == "lower" else 1 / q_across)
-    blocks = []
-    for side, (s0, s1) in (("up", ("in", "throat")), ("down", ("throat", "out"))):
-        for half, (lo, hi) in (("lower", ("lower", "mid")), ("upper", ("mid", "upper"))):
-            loop = [along[lo, side], across[s1, half], -along[hi, side], -across[s0, half]]
-            patches = [
-                "gapWalls" if lo == "lower" else None,
-                "outlet" if s1 == "out" else None,
-                "gapWalls" if hi == "upper" else None,
-                None,  # the inlet lines are the chamber's opening: internal faces
-            ]
-            surface = geo.addPlaneSurface([geo.addCurveLoop(loop)])
-            geo.mesh.setTransfiniteSurface(surface)
-            geo.mesh.setRecombine(2, surface)
-            blocks.append((surface, patches))
+    # The inlet lines are the chamber's opening: internal faces.
+    names = {"lower": "gapWalls", "upper": "gapWalls", "in": None, "out": "outlet"}
+    blocks, corner, across = gap_blocks(geo, domain.walls, gspec, names, domain.to_plane)
     inlet = ((corner["lower", "in"], across["in", "lower"]),
              (across["in", "upper"], corner["upper", "in"]))
     return blocks, inlet
-
 
 def build_foam_mesh(case_dir: Path, domain: ChamberDomain,
                     spec: ChamberMeshSpec) -> tuple[ChamberMesh, foam.MeshQuality]:

@@ -377,70 +377,12 @@ def write_msh(walls: GapWalls, spec: GapMeshSpec, path: Path) -> GapMesh:
     """Mesh the gap with gmsh and write ASCII MSH 2.2 (what gmshToFoam reads) to ``path``."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    xt = walls.throat_x
-    margin = THROAT_END_MARGIN * walls.length
-    if not walls.x_inlet + margin < xt < walls.x_outlet - margin:
-        raise CaseError(
-            "the minimum gap lies at an end of the walls; extend them past the sealing line"
-        )
     depth = spec.depth_m if spec.depth_m is not None else walls.min_gap
-    n_half = spec.half_cells_across
-    n_along = spec.cells_along_refined
-    q_across = spec.across_rate
-    q_along = spec.along_rates(xt - walls.x_inlet, walls.x_outlet - xt)
-
-    def y_mid(x):
-        return 0.5 * (walls.y_lower(x) + walls.y_upper(x))
-
-    walls_y = {"lower": walls.y_lower, "mid": y_mid, "upper": walls.y_upper}
-    stations = {"in": walls.x_inlet, "throat": xt, "out": walls.x_outlet}
+    names = {"lower": "lowerWall", "upper": "upperWall", "in": "inlet", "out": "outlet"}
 
     with gmsh_session("gap", log_dir=path.parent) as gmsh:
         geo = gmsh.model.geo
-        corner = {
-            (w, s): geo.addPoint(x, float(walls_y[w](x)), 0.0)
-            for w in walls_y
-            for s, x in stations.items()
-        }
-
-        def wall_piece(w: str, s0: str, s1: str) -> int:
-            # Evenly spaced control points: gmsh spaces the transfinite nodes by arc length
-            # along the spline, which uneven control points would distort.
-            x = np.linspace(stations[s0], stations[s1], SPLINE_POINTS)
-            y = walls_y[w](x)
-            inner = [geo.addPoint(float(a), float(b), 0.0) for a, b in zip(x[1:-1], y[1:-1],
-                                                                              strict=True)]
-            return geo.addSpline([corner[w, s0], *inner, corner[w, s1]])
-
-        along = {(w, side): wall_piece(w, *ends) for w in walls_y
-                 for side, ends in (("up", ("in", "throat")), ("down", ("throat", "out")))}
-        across = {(s, half): geo.addLine(corner[lo, s], corner[hi, s])
-                  for s in stations for half, (lo, hi) in (("lower", ("lower", "mid")),
-                                                           ("upper", ("mid", "upper")))}
-        for (_, side), c in along.items():
-            # Cells shrink toward the throat: upstream pieces run toward it, downstream away.
-            geo.mesh.setTransfiniteCurve(c, n_along + 1, "Progression",
-                                         1 / q_along[0] if side == "up" else q_along[1])
-        for (_, half), c in across.items():
-            # Lines run lower -> upper: grow away from the lower wall, shrink to the upper.
-            geo.mesh.setTransfiniteCurve(c, n_half + 1, "Progression",
-                                         q_across if half == "lower" else 1 / q_across)
-
-        # Each block: its loop (counter-clockwise) and the patch of each of its four edges.
-        blocks = []
-        for side, (s0, s1) in (("up", ("in", "throat")), ("down", ("throat", "out"))):
-            for half, (lo, hi) in (("lower", ("lower", "mid")), ("upper", ("mid", "upper"))):
-                loop = [along[lo, side], across[s1, half], -along[hi, side], -across[s0, half]]
-                patches = [
-                    "lowerWall" if lo == "lower" else None,
-                    "outlet" if s1 == "out" else None,
-                    "upperWall" if hi == "upper" else None,
-                    "inlet" if s0 == "in" else None,
-                ]
-                surface = geo.addPlaneSurface([geo.addCurveLoop(loop)])
-                geo.mesh.setTransfiniteSurface(surface)
-                geo.mesh.setRecombine(2, surface)
-                blocks.append((surface, patches))
+        blocks, _, _ = gap_blocks(geo, walls, spec, names)
 
         groups: dict[str, list[int]] = {name: [] for name in PATCH_TYPES}
         volumes = []
@@ -464,6 +406,80 @@ def write_msh(walls: GapWalls, spec: GapMeshSpec, path: Path) -> GapMesh:
         gmsh.option.setNumber("Mesh.SaveAll", 0)
         gmsh.write(str(path))
     return GapMesh(path, walls, spec, depth, cells)
+
+
+def gap_blocks(geo, walls: GapWalls, spec: GapMeshSpec, names: dict[str, str | None],
+               to_plane=None):
+    """The gap's four transfinite blocks, split at the throat and the mid-line.
+
+    ``names`` gives the patch of the lower and upper walls and of the "in" and "out" ends
+    (None: internal faces); ``to_plane`` maps gap-frame (x, y) into the model plane
+    (identity by default).  Returns the blocks as (surface, patch of each loop edge), the
+    corner points keyed (wall, station) and the end lines keyed (station, half).
+    """
+    xt = walls.throat_x
+    margin = THROAT_END_MARGIN * walls.length
+    if not walls.x_inlet + margin < xt < walls.x_outlet - margin:
+        raise CaseError(
+            "the minimum gap lies at an end of the walls; extend them past the sealing line"
+        )
+    n_half = spec.half_cells_across
+    n_along = spec.cells_along_refined
+    q_across = spec.across_rate
+    q_along = spec.along_rates(xt - walls.x_inlet, walls.x_outlet - xt)
+
+    def y_mid(x):
+        return 0.5 * (walls.y_lower(x) + walls.y_upper(x))
+
+    walls_y = {"lower": walls.y_lower, "mid": y_mid, "upper": walls.y_upper}
+    stations = {"in": walls.x_inlet, "throat": xt, "out": walls.x_outlet}
+
+    def point(x: float, y: float) -> int:
+        if to_plane is not None:
+            x, y = to_plane(x, y)
+        return geo.addPoint(float(x), float(y), 0.0)
+
+    corner = {(w, s): point(x, float(walls_y[w](x))) for w in walls_y
+              for s, x in stations.items()}
+
+    def wall_piece(w: str, s0: str, s1: str) -> int:
+        # Evenly spaced control points: gmsh spaces the transfinite nodes by arc length
+        # along the spline, which uneven control points would distort.
+        x = np.linspace(stations[s0], stations[s1], SPLINE_POINTS)
+        y = walls_y[w](x)
+        inner = [point(float(a), float(b)) for a, b in zip(x[1:-1], y[1:-1], strict=True)]
+        return geo.addSpline([corner[w, s0], *inner, corner[w, s1]])
+
+    along = {(w, side): wall_piece(w, *ends) for w in walls_y
+             for side, ends in (("up", ("in", "throat")), ("down", ("throat", "out")))}
+    across = {(s, half): geo.addLine(corner[lo, s], corner[hi, s])
+              for s in stations for half, (lo, hi) in (("lower", ("lower", "mid")),
+                                                       ("upper", ("mid", "upper")))}
+    for (_, side), c in along.items():
+        # Cells shrink toward the throat: upstream pieces run toward it, downstream away.
+        geo.mesh.setTransfiniteCurve(c, n_along + 1, "Progression",
+                                     1 / q_along[0] if side == "up" else q_along[1])
+    for (_, half), c in across.items():
+        # Lines run lower -> upper: grow away from the lower wall, shrink to the upper.
+        geo.mesh.setTransfiniteCurve(c, n_half + 1, "Progression",
+                                     q_across if half == "lower" else 1 / q_across)
+
+    # Each block: its loop (counter-clockwise) and the patch of each of its four edges.
+    blocks = []
+    for side, (s0, s1) in (("up", ("in", "throat")), ("down", ("throat", "out"))):
+        for half, (lo, hi) in (("lower", ("lower", "mid")), ("upper", ("mid", "upper"))):
+            loop = [along[lo, side], across[s1, half], -along[hi, side], -across[s0, half]]
+            patches = [
+                names["lower"] if lo == "lower" else None,
+                names["out"] if s1 == "out" else None,
+                names["upper"] if hi == "upper" else None,
+                names["in"] if s0 == "in" else None,
+            ]
+            surface = geo.addPlaneSurface([geo.addCurveLoop(loop)])
+            geo.mesh.setTransfiniteSurface(surface)
+            geo.mesh.setRecombine(2, surface)
+            blocks.append((surface, patches))
+    return blocks, corner, across
 
 
 def build_foam_mesh(case_dir: Path, walls: GapWalls, spec: GapMeshSpec) -> tuple[GapMesh,

@@ -62,27 +62,29 @@ class PowerSplit:
         return abs(self.mean_power_per_omega1 / self.cycle_power_per_omega1 - 1.0)
 
 
-def net_loads(machine: InternalGearMachine, pressure: np.ndarray):
-    """Sum chamber loads over every chamber present (Eq. 16), over one lobe period.
+def _fold(phi, torque1, torque2, force1, pressure, per_period: int):
+    """Sum the loads of every chamber present (Eq. 16) over one lobe period.
 
-    Chamber k lags the first by k periods; on the uniform grid a period is exactly
-    ``points_per_period`` samples, so shifting is indexing.  Returns angles, net fluid
-    torques on both rotors and the net fluid force on the outer rotor.
+    Chamber k lags the first by k periods; on a period-aligned grid a period is exactly
+    ``per_period`` samples, so shifting is indexing.
     """
-    c = machine.curves
-    m = machine.points_per_period
-    n = len(c.phi)
-    reps = -(-n // m)
-    pad = reps * m - n
+    n = len(phi)
+    reps = -(-n // per_period)
+    pad = reps * per_period - n
 
     def fold(x):
         x = np.concatenate([x, np.zeros((pad,) + x.shape[1:])])
-        return x.reshape((reps, m) + x.shape[1:]).sum(0)
+        return x.reshape((reps, per_period) + x.shape[1:]).sum(0)
 
-    t1 = fold(pressure * c.torque1)
-    t2 = fold(pressure * c.torque2)
-    f1 = fold(pressure[:, None] * c.force1)
-    return c.phi[:m], t1, t2, f1
+    return (phi[:per_period], fold(pressure * torque1), fold(pressure * torque2),
+            fold(pressure[:, None] * force1))
+
+
+def net_loads(machine: InternalGearMachine, pressure: np.ndarray):
+    """Net fluid torques on both rotors and net fluid force on the outer rotor over one
+    lobe period, for a pressure given on the chamber-curve grid."""
+    c = machine.curves
+    return _fold(c.phi, c.torque1, c.torque2, c.force1, pressure, machine.points_per_period)
 
 
 def power_split(
@@ -93,11 +95,14 @@ def power_split(
     gamma: float = GAMMA_AIR,
 ) -> PowerSplit:
     """Seed 000 Eqs. 17-22: power balance, power ratios, driven rotor and Pi_max."""
-    c = machine.curves
-    p = adiabatic_pressure(c.volume, eps_v, p_suction, gamma)
+    # Loads on the fine section grid: the power ratios have kinks (a chamber starting
+    # to discharge), so their maximum is taken where the loads are sampled finely.
+    fine = machine.loads
+    p = adiabatic_pressure(fine.volume, eps_v, p_suction, gamma)
     # Gauge pressure: a uniform pressure loads no rotor, so only p - p_suction matters,
     # and leaving it out keeps the sums free of cancellation.
-    phi, t1, t2, f1 = net_loads(machine, p - p_suction)
+    phi, t1, t2, f1 = _fold(fine.phi, fine.torque1, fine.torque2, fine.force1, p - p_suction,
+                            machine.points_per_period * machine.section_refinement)
     shaft1, shaft2 = -t1, -t2
     m21 = machine.pair.m21
     p_in = shaft1 + m21 * shaft2
@@ -105,7 +110,9 @@ def power_split(
     r2 = m21 * shaft2 / p_in
     # Eq. 18 with the cycle work of the chamber's own p-V loop; for a conjugate pair
     # (no clearance volume) it equals the closed form of Eq. 17 (see tests).
-    w = -float(np.trapezoid((p - p_suction) * c.dvolume, c.phi))
+    c = machine.curves
+    p_c = adiabatic_pressure(c.volume, eps_v, p_suction, gamma)
+    w = -float(np.trapezoid((p_c - p_suction) * c.dvolume, c.phi))
     cycle = w * machine.pair.lobes_outer / (2.0 * math.pi)
     if driven == "auto":
         driven = "outer" if r1.max() > r2.max() else "inner"

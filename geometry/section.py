@@ -30,6 +30,7 @@ import numpy as np
 
 from .pin_gerotor import TWO_PI, PinGerotor
 from .pin_space import PinSpace
+from .split_space import SplitRegions, SplitSpace
 
 #: Default angle samples per lobe period (2 pi / N1) of the section tables.
 POINTS_PER_PERIOD = 96
@@ -64,6 +65,34 @@ def _torques(a, b, o2):
     t1 = -0.5 * (np.sum(b * b, -1) - np.sum(a * a, -1))
     t2 = 0.5 * (np.sum((b - o2) ** 2, -1) - np.sum((a - o2) ** 2, -1))
     return t1, t2
+
+
+def _fill_split(reg: SplitRegions, birth, o2, rows, area, dx, dy, tq1, tq2, trail, lead,
+                perim_o, perim_i) -> None:
+    """Sum the sub-regions that belong to this chamber (see the module docstring).
+
+    While the split is open a newborn chamber owns the touched sub-regions and a dying
+    one the others; when only the two pin contacts are left the space is whole.
+    """
+    valid = reg.valid
+    keep = np.where(reg.count[:, None] == 2, np.arange(valid.shape[1])[None, :] == 0,
+                    valid & (reg.touched == birth[:, None]))
+    a, b = reg.points[:, :-1], reg.points[:, 1:]
+    w = keep.astype(float)
+    area[rows] = (reg.area * w).sum(1)
+    perim_o[rows] = (reg.perimeter_outer * w).sum(1)
+    perim_i[rows] = (reg.perimeter_inner * w).sum(1)
+    d = ((b - a) * w[..., None]).sum(1)
+    dx[rows], dy[rows] = d[:, 0], d[:, 1]
+    t1, t2 = _torques(np.where(keep[..., None], a, 0.0), np.where(keep[..., None], b, 0.0), o2)
+    tq1[rows], tq2[rows] = t1.sum(1), t2.sum(1)
+    any_kept = keep.any(1)
+    first = np.argmax(keep, axis=1)
+    last = keep.shape[1] - 1 - np.argmax(keep[:, ::-1], axis=1)
+    n = np.arange(len(first))
+    # The very instant of birth or death: a point, where the first fillet contact is.
+    trail[rows] = np.where(any_kept[:, None], a[n, first], reg.points[:, 1])
+    lead[rows] = np.where(any_kept[:, None], b[n, last], reg.points[:, 1])
 
 
 def section_chamber(pair: PinGerotor, points_per_period: int = POINTS_PER_PERIOD) -> SectionChamber:
@@ -110,28 +139,10 @@ def section_chamber(pair: PinGerotor, points_per_period: int = POINTS_PER_PERIOD
     dx[whole], dy[whole] = d[:, 0], d[:, 1]
     tq1[whole], tq2[whole] = _torques(t, lpt, o2)
 
-    for i in np.nonzero(~whole & ~dead)[0]:
-        phi = psi[i]
-        cs, areas, touched = space.region_areas(phi)
-        birth = phi < phi_j + 1e-12
-        if len(cs) == 2:  # at the phase ends the split has just closed
-            keep = [0]
-        else:
-            keep = [k for k in range(len(areas)) if touched[k] == birth]
-        if not keep:  # the very instant of birth or death: a point
-            area[i] = dx[i] = dy[i] = tq1[i] = tq2[i] = perim_o[i] = perim_i[i] = 0.0
-            trail[i] = lead[i] = cs[1].point
-            continue
-        area[i] = areas[keep].sum()
-        per = np.array([space.perimeters(cs[k], cs[k + 1]) for k in keep]).sum(0)
-        perim_o[i], perim_i[i] = per
-        pa = np.array([cs[k].point for k in keep])
-        pb = np.array([cs[k + 1].point for k in keep])
-        d = (pb - pa).sum(0)
-        dx[i], dy[i] = d
-        t1, t2 = _torques(pa, pb, o2)
-        tq1[i], tq2[i] = t1.sum(), t2.sum()
-        trail[i], lead[i] = pa[0], pb[-1]
+    split = ~whole & ~dead
+    if split.any():
+        _fill_split(SplitSpace(space).regions(psi[split]), psi[split] < phi_j + 1e-12,
+                    o2, split, area, dx, dy, tq1, tq2, trail, lead, perim_o, perim_i)
     # The chamber is born and dies as a point: exact zeros at the ends (there the
     # contact search may already see the neighbouring chamber's whole space).
     ends = np.zeros(n, dtype=bool)

@@ -74,3 +74,18 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, name):
 def test_missing_case_file(tmp_path):
     out = run("geometry", tmp_path / "nope.toml")
     assert out.returncode == 2 and "not found" in out.stderr
+
+
+def test_contacts_csv_and_a_bad_step(tmp_path):
+    import csv
+
+    target = tmp_path / "contacts.csv"
+    out = run("contacts", CASES / "default.toml", "--out", target, "--step-deg", 5)
+    assert out.returncode == 0, out.stderr
+    rows = list(csv.DictReader(target.open()))
+    # 12 angles over one 60-degree period, six pins each, plus the fillet contacts.
+    assert sum(r["kind"] == "pin" for r in rows) == 12 * 6
+    bad = tmp_path / "bad.csv"
+    out = run("contacts", CASES / "default.toml", "--out", bad, "--step-deg", 0)
+    assert out.returncode == 2 and "step" in out.stderr and len(out.stderr.splitlines()) == 1
+    assert not bad.exists()

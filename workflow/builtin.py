@@ -50,11 +50,17 @@ def machine_of(ctx: StageContext):
     return _machines[key]
 
 
+#: Angle step of the contact table the geometry stage writes (one lobe period).
+CONTACT_STEP_DEG = 0.5
+
+
 def run_geometry(ctx: StageContext) -> dict:
+    from rotorflow.geometry.contacts import contact_table, write_csv
     from rotorflow.geometry.summary import geometry_figures
 
     figures = geometry_figures(ctx.case, machine_of(ctx))
     write_json(ctx.out / "geometry.json", figures)
+    write_csv(contact_table(ctx.case.pair, CONTACT_STEP_DEG), ctx.out / "contacts.csv")
     return {"swept_volume_m3": figures["swept_volume_m3"], "driven": figures["driven"]}
 
 

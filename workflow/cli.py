@@ -65,6 +65,20 @@ def cmd_table(args) -> int:
     return 0
 
 
+def cmd_contacts(args) -> int:
+    from rotorflow.errors import CaseError
+    from rotorflow.geometry.contacts import contact_table, write_csv
+    from rotorflow.workflow.case import load_case
+
+    if not args.step_deg > 0.0:
+        raise CaseError(f"--step-deg must be positive, got {args.step_deg}")
+    case = load_case(args.case)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    print(write_csv(contact_table(case.pair, args.step_deg), out))
+    return 0
+
+
 def cmd_simulate(args) -> int:
     from rotorflow.geometry.summary import chamber_table
     from rotorflow.quasi1d import Leakage, Numerics, Operating, Ports, simulate
@@ -199,6 +213,12 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("case", type=Path)
     t.add_argument("--out", type=Path, required=True, help="path of the CSV to write")
     t.set_defaults(func=cmd_table)
+    c = sub.add_parser("contacts", help="write every contact point against outer-rotor angle "
+                       "(CSV, one lobe period)")
+    c.add_argument("case", type=Path)
+    c.add_argument("--out", type=Path, required=True, help="path of the CSV to write")
+    c.add_argument("--step-deg", type=float, default=1.0, help="angle step (default 1)")
+    c.set_defaults(func=cmd_contacts)
     q = sub.add_parser("simulate", help="quasi-1D model of the case's operating point")
     q.add_argument("case", type=Path)
     q.add_argument("--json", action="store_true", help="one JSON object on stdout")

@@ -216,7 +216,8 @@ _REPORT = "rotorflow.postprocess.report"
 register(Stage(
     name="geometry",
     run=f"{_IMPL}:run_geometry",
-    description="profile, chamber and power-split figures (geometry.json)",
+    description=("profile, chamber and power-split figures (geometry.json), contact points "
+                 "(contacts.csv)"),
     reads=GEOMETRY_READS,
     code=("rotorflow.geometry",),
     report=f"{_REPORT}:geometry_section",

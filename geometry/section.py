@@ -18,7 +18,14 @@ Per unit length and unit pressure, each chamber section carries:
   (seed 000 Eqs. 9, 11);
 * ``tq1, tq2``: torque *exerted by the fluid* on the outer rotor about O1 and on the
   inner rotor about O2, ``-1/2 (|l|^2 - |t|^2)`` and ``+1/2 (|l-O2|^2 - |t-O2|^2)``
-  (Eqs. 10, 12 written with the chord midpoints).
+  (Eqs. 10, 12 written with the chord midpoints);
+* ``lead_offset, trail_offset``: which chamber lies beyond the leading and trailing
+  contact, in lobe periods of age (+1: the next, older chamber).  Beyond a pin contact
+  is the neighbouring tooth space, whose occupant is one period older or younger unless
+  that chamber has already died (or is not yet born) there, in which case it is the one
+  a revolution younger (older): ``1 - N1`` (``N1 - 1``), seed 001's radial paths to C22
+  and C31.  Beyond a fillet contact is the other chamber of the same space, a revolution
+  apart (``+-N1``: seed 001's axial paths C11, C12).
 """
 
 from __future__ import annotations
@@ -55,6 +62,28 @@ class SectionChamber:
     lobes_outer: int
     m21: float
     centre_distance: float
+    lead_offset: np.ndarray | None = None
+    trail_offset: np.ndarray | None = None
+    lead_id: np.ndarray | None = None  # which contact is the leading one (see split_space)
+    trail_id: np.ndarray | None = None
+
+    def contact_rate(self, which: str) -> np.ndarray:
+        """d(contact point)/d(psi) of the leading or trailing contact, on the grid.
+
+        Where the contact changes identity (a pin contact hands over to a fillet
+        contact, or a sub-region closes) the point jumps across the chamber; that jump
+        is no sealing line, so differences never cross it.
+        """
+        pts = self.lead if which == "lead" else self.trail
+        ids = self.lead_id if which == "lead" else self.trail_id
+        h = self.psi[1] - self.psi[0]
+        d = np.diff(pts, axis=0) / h
+        same = (ids[1:] == ids[:-1])[:, None]
+        fwd = np.vstack([d * same, np.zeros((1, 2))])
+        back = np.vstack([np.zeros((1, 2)), d * same])
+        nf = np.append(same[:, 0], False).astype(float)[:, None]
+        nb = np.insert(same[:, 0], 0, False).astype(float)[:, None]
+        return (fwd + back) / np.maximum(nf + nb, 1.0)
 
     @property
     def area_max(self) -> float:
@@ -68,7 +97,7 @@ def _torques(a, b, o2):
 
 
 def _fill_split(reg: SplitRegions, birth, o2, rows, area, dx, dy, tq1, tq2, trail, lead,
-                perim_o, perim_i) -> None:
+                perim_o, perim_i, lead_pin, trail_pin, lead_id, trail_id) -> None:
     """Sum the sub-regions that belong to this chamber (see the module docstring).
 
     While the split is open a newborn chamber owns the touched sub-regions and a dying
@@ -93,6 +122,47 @@ def _fill_split(reg: SplitRegions, birth, o2, rows, area, dx, dy, tq1, tq2, trai
     # The very instant of birth or death: a point, where the first fillet contact is.
     trail[rows] = np.where(any_kept[:, None], a[n, first], reg.points[:, 1])
     lead[rows] = np.where(any_kept[:, None], b[n, last], reg.points[:, 1])
+    trail_pin[rows] = any_kept & (first == 0)
+    lead_pin[rows] = any_kept & (last == reg.count - 2)
+    k = reg.branch.shape[1]
+    trail_id[rows] = np.where(any_kept, reg.branch[n, first], -1)
+    lead_id[rows] = np.where(any_kept, reg.branch[n, np.minimum(last + 1, k - 1)], -1)
+
+
+def _neighbour_offsets(space, psi, birth, lead_pin, trail_pin, phi_i, phi_j, phi_f):
+    """Age offsets (in periods) of the chambers beyond the leading and trailing contact."""
+    n1 = space.pair.lobes_outer
+    period = TWO_PI / n1
+    s = max(phi_j - phi_i, 0.0)  # length of the split phase
+    splitter = SplitSpace(space) if s > 0.0 else None
+
+    def occupant(angle, region_of):
+        """+0 where the chamber of age ``angle`` holds that side of its space, -1 where
+        the chamber a revolution younger does (the older one has died there)."""
+        out = np.where(angle < phi_f, 0, -1)
+        both = (angle >= phi_f - s) & (angle < phi_f) if s > 0.0 else np.zeros_like(out, bool)
+        if both.any():
+            reg = splitter.regions(angle[both])
+            touched = region_of(reg)
+            out[both] = np.where(touched, -1, 0)
+        return out
+
+    # Ahead: the space one period on, seen at its trailing pin (its first sub-region).
+    ahead = occupant(psi + period, lambda reg: reg.touched[:, 0] & (reg.count > 2))
+    # Behind: the space one period back; where its own chamber is not yet born there
+    # (angle below phi_i), the occupant is the one a revolution older.
+    back = psi - period
+    behind = np.where(back < phi_i, 1, 0)
+    if s > 0.0:
+        young = (back >= phi_i) & (back < phi_j)
+        if young.any():
+            reg = splitter.regions(back[young])
+            last = np.take_along_axis(reg.touched, np.maximum(reg.count - 2, 0)[:, None], 1)[:, 0]
+            behind[young] = np.where(last | (reg.count == 2), 0, 1)
+    other = np.where(birth, n1, -n1)  # the other chamber of the same space
+    lead_offset = np.where(lead_pin, 1 + n1 * ahead, other)
+    trail_offset = np.where(trail_pin, -1 + n1 * behind, other)
+    return lead_offset.astype(int), trail_offset.astype(int)
 
 
 def section_chamber(pair: PinGerotor, points_per_period: int = POINTS_PER_PERIOD) -> SectionChamber:
@@ -139,10 +209,21 @@ def section_chamber(pair: PinGerotor, points_per_period: int = POINTS_PER_PERIOD
     dx[whole], dy[whole] = d[:, 0], d[:, 1]
     tq1[whole], tq2[whole] = _torques(t, lpt, o2)
 
+    lead_pin = np.ones(n, dtype=bool)
+    trail_pin = np.ones(n, dtype=bool)
+    lead_id = np.full(n, 1000)  # pin 0 (ids of split_space branches below)
+    trail_id = np.zeros(n, dtype=int)  # pin -1
     split = ~whole & ~dead
+    birth = psi < phi_j + 1e-12
     if split.any():
-        _fill_split(SplitSpace(space).regions(psi[split]), psi[split] < phi_j + 1e-12,
-                    o2, split, area, dx, dy, tq1, tq2, trail, lead, perim_o, perim_i)
+        _fill_split(SplitSpace(space).regions(psi[split]), birth[split],
+                    o2, split, area, dx, dy, tq1, tq2, trail, lead, perim_o, perim_i,
+                    lead_pin, trail_pin, lead_id, trail_id)
+        # Pin 0 is the last branch of split_space; give it the id of the whole phase.
+        k = 2 + len(SplitSpace(space)._branches)
+        lead_id[lead_id == k - 1] = 1000
+    lead_offset, trail_offset = _neighbour_offsets(space, psi, birth, lead_pin, trail_pin,
+                                                   phi_i, phi_j, phi_f)
     # The chamber is born and dies as a point: exact zeros at the ends (there the
     # contact search may already see the neighbouring chamber's whole space).
     ends = np.zeros(n, dtype=bool)
@@ -170,4 +251,8 @@ def section_chamber(pair: PinGerotor, points_per_period: int = POINTS_PER_PERIOD
         lobes_outer=n1,
         m21=pair.m21,
         centre_distance=pair.E,
+        lead_offset=lead_offset,
+        trail_offset=trail_offset,
+        lead_id=lead_id,
+        trail_id=trail_id,
     )

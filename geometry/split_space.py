@@ -40,6 +40,7 @@ class SplitRegions:
 
     count: np.ndarray  # (n,) number of contacts
     points: np.ndarray  # (n, k, 2) fixed frame
+    branch: np.ndarray  # (n, k) which contact: 0 pin -1, 1.. fillet branches, k - 1 pin 0
     area: np.ndarray  # (n, k - 1)
     touched: np.ndarray  # (n, k - 1) bool
     perimeter_outer: np.ndarray  # (n, k - 1)
@@ -139,6 +140,8 @@ class SplitSpace:
             return np.take_along_axis(a, idx, axis=1)
 
         g2, gfil, pts = pack(g2), pack(gfil), pack(pts)
+        branch = pack(np.broadcast_to(np.arange(k)[None, :], (n, k)).copy())
+        branch[~np.take_along_axis(present, order, axis=1)] = k - 1
         r = np.arange(k - 1)[None, :]
         valid = r < count[:, None] - 1
         a_pin = np.broadcast_to(r == 0, valid.shape)
@@ -165,6 +168,7 @@ class SplitSpace:
         return SplitRegions(
             count=count,
             points=pts,
+            branch=branch,
             area=np.where(zero, 0.0, outer + inner),
             touched=touched & valid,
             perimeter_outer=np.where(zero, 0.0, per_o),

@@ -83,14 +83,16 @@ def chamber_table(case, machine: InternalGearMachine | None = None) -> ChamberTa
     pair = m.pair
     ratio = {"inner": pair.lobes_inner / pair.lobes_outer, "outer": 1.0}
     driven = case.driven if case.driven != "auto" else power_split(m, case.volume_ratio).driven
+    lines = m.seal_lines
+    zero = np.zeros_like(cur.phi)
     return ChamberTable(
         angle_rad=cur.phi - cur.phi[0],
         volume_m3=cur.volume,
         dVdangle_m3_rad=cur.dvolume,
         area_lp_m2=cur.area_lp,
         area_hp_m2=cur.area_hp,
-        seal_next_m=m.seal_lines[0],
-        seal_prev_m=m.seal_lines[1],
+        seal_next_m=lines.get(1, zero),
+        seal_prev_m=lines.get(-1, zero),
         seal_lp_face_m=cur.perimeter_lp,
         seal_hp_face_m=cur.perimeter_hp,
         lobes_outer=pair.lobes_outer,
@@ -98,4 +100,5 @@ def chamber_table(case, machine: InternalGearMachine | None = None) -> ChamberTa
         speed_ratio_outer_per_driven=ratio[driven],
         length_m=m.sweep.length,
         diameter_m=pair.diameter,
+        seal_far={d: v for d, v in lines.items() if abs(d) >= 2},
     )

@@ -18,6 +18,11 @@ CSV columns (one row per angle, uniform spacing):
     seal_lp_face_m       rotor-tip length along which the chamber meets the low-pressure
                          end plate (leaks across the end-face clearance to suction)
     seal_hp_face_m       same on the high-pressure end plate (leaks to/from discharge)
+    seal_next{d}_m       (optional, d >= 2) sealing line shared with the chamber d periods
+    seal_prev{d}_m       older / younger: where the neighbouring space's own chamber has
+                         died (is not yet born) there, the line faces the chamber a
+                         revolution younger (older), and across the fillet contacts the
+                         chamber a revolution apart (seed 001's paths C22, C31, C11, C12)
 
 The JSON side-car (same stem, ``.json``) carries the scalars: ``lobes_outer``,
 ``period_rad`` (= 2*pi/lobes_outer), ``speed_ratio_outer_per_driven``, ``volume_max_m3``,
@@ -29,7 +34,8 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass
+import re
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -65,6 +71,16 @@ class ChamberTable:
     length_m: float
     diameter_m: float
     machine: str = "internal-gear"
+    seal_far: dict[int, np.ndarray] = field(default_factory=dict)
+    """Sealing lines to chambers more than one period away, keyed by the signed offset."""
+
+    def seal_to(self, offset: int) -> np.ndarray:
+        """Sealing line to the chamber ``offset`` periods older (negative: younger)."""
+        if offset == 1:
+            return self.seal_next_m
+        if offset == -1:
+            return self.seal_prev_m
+        return self.seal_far.get(offset, np.zeros_like(self.angle_rad))
 
     @property
     def period_rad(self) -> float:
@@ -96,11 +112,22 @@ class ChamberTable:
         }
 
 
+def far_column(offset: int) -> str:
+    """Column name of the sealing line to the chamber ``offset`` periods away (|d| >= 2)."""
+    return f"seal_{'next' if offset > 0 else 'prev'}{abs(offset)}_m"
+
+
+_FAR = re.compile(r"seal_(next|prev)(\d+)_m")
+
+
 def write(table: ChamberTable, csv_path: Path) -> None:
     """Write ``csv_path`` and its ``.json`` side-car (callers make the folder atomic)."""
     csv_path = Path(csv_path)
-    data = np.column_stack([getattr(table, c) for c in COLUMNS])
-    np.savetxt(csv_path, data, delimiter=",", header=",".join(COLUMNS), comments="", fmt="%.12e")
+    far = sorted(table.seal_far, key=lambda d: (abs(d), -d))
+    names = list(COLUMNS) + [far_column(d) for d in far]
+    data = np.column_stack([getattr(table, c) for c in COLUMNS]
+                           + [table.seal_far[d] for d in far])
+    np.savetxt(csv_path, data, delimiter=",", header=",".join(names), comments="", fmt="%.12e")
     csv_path.with_suffix(".json").write_text(json.dumps(table.scalars(), indent=2) + "\n")
 
 
@@ -119,6 +146,11 @@ def read(csv_path: Path) -> ChamberTable:
         raise ValueError(f"chamber table {csv_path} lacks column(s): {', '.join(missing)}")
     data = np.loadtxt(csv_path, delimiter=",", skiprows=1, ndmin=2)
     cols = {c: data[:, header.index(c)] for c in COLUMNS}
+    far = {}
+    for i, name in enumerate(header):
+        m = _FAR.fullmatch(name)
+        if m and int(m.group(2)) >= 2:
+            far[int(m.group(2)) * (1 if m.group(1) == "next" else -1)] = data[:, i]
     meta = json.loads(side.read_text())
     return ChamberTable(
         **cols,
@@ -127,6 +159,7 @@ def read(csv_path: Path) -> ChamberTable:
         length_m=float(meta["length_m"]),
         diameter_m=float(meta["diameter_m"]),
         machine=str(meta.get("machine", "internal-gear")),
+        seal_far=far,
     )
 
 

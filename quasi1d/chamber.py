@@ -47,6 +47,19 @@ class ChamberGeometry:
     v_discharge: float  # volume at discharge opening
     omega_outer: float  # rad/s
     radius: float  # outer-rotor radius, for the wall speed in the gaps
+    far_offsets: tuple[int, ...] = ()  # rows 6.. of ``lin``: lines to chambers |d| >= 2 away
+
+    def row_of(self, offset: int) -> int:
+        """Row of ``lin`` holding the sealing line to the chamber ``offset`` periods older."""
+        if offset == 1:
+            return 2
+        if offset == -1:
+            return 3
+        return len(LINEAR_COLUMNS) + self.far_offsets.index(offset)
+
+    @property
+    def rows(self) -> int:
+        return len(LINEAR_COLUMNS) + len(self.far_offsets)
 
     @property
     def slots(self) -> int:
@@ -54,7 +67,7 @@ class ChamberGeometry:
         return int(math.floor((self.death - self.birth) / self.period * (1 + 1e-12))) + 1
 
     def evaluate(self, ages: np.ndarray):
-        """V, dV/dangle and the six linear columns at the given ages (arrays of ages.shape)."""
+        """V, dV/dangle and the linear columns at the given ages (rows, then ages.shape)."""
         i = np.clip(np.searchsorted(self.nodes, ages, side="right") - 1, 0, self.coef.shape[1] - 1)
         s = ages - self.nodes[i]
         c = self.coef[:, i]
@@ -77,8 +90,11 @@ def prepare(table, volume_ratio, suction_close, discharge_open, speed_rpm,
         raise CaseError("chamber table has fewer than 4 rows")
     if not np.all(np.diff(a) > 0):
         raise CaseError("chamber table angles must increase strictly")
+    far = tuple(sorted(getattr(table, "seal_far", {}), key=lambda d: (abs(d), -d)))
     cols = [np.asarray(getattr(table, c), dtype=float) for c in LINEAR_COLUMNS]
-    for name, col in zip(("volume_m3", "dVdangle_m3_rad", *LINEAR_COLUMNS), [V, dV, *cols],
+    cols += [np.asarray(table.seal_far[d], dtype=float) for d in far]
+    names = (*LINEAR_COLUMNS, *(f"seal to chamber {d:+d}" for d in far))
+    for name, col in zip(("volume_m3", "dVdangle_m3_rad", *names), [V, dV, *cols],
                          strict=True):
         if col.shape != a.shape or not np.all(np.isfinite(col)):
             raise CaseError(f"chamber table column {name} is missing values or not finite")
@@ -129,7 +145,7 @@ def prepare(table, volume_ratio, suction_close, discharge_open, speed_rpm,
     omega = 2.0 * math.pi * speed_rpm / 60.0 * table.speed_ratio_outer_per_driven
     return ChamberGeometry(a, coef, period, table.lobes_outer, vmax, birth, death, sc, do,
                            float(geo.volume(sc)), float(geo.volume(do)), omega,
-                           0.5 * float(table.diameter_m))
+                           0.5 * float(table.diameter_m), far)
 
 
 def _crossing(geo, a, V, level, i0, i1) -> float:

@@ -73,7 +73,8 @@ class Segment:
     Nodes: 0 the suction plenum, 1..n_act the active slots, n_act+1 the discharge plenum.
     Flow f goes from node ia[f] to node ib[f] through area = area_map @ geometry, where the
     geometry vector is ChamberGeometry.evaluate's ``lin`` raveled (rows area_lp, area_hp,
-    seal_next, seal_prev, seal_lp_face, seal_hp_face over the active slots).  The matrices
+    seal_next, seal_prev, seal_lp_face, seal_hp_face, then the lines to chambers two or
+    more periods away, over the active slots).  The matrices
     mm, me, mg map mass flows, enthalpy flows and |mass flows| straight into dy/dtheta
     (slot balances and accumulators); mx, mxe do the same for the ideal-port flows.
     """
@@ -89,8 +90,8 @@ class Segment:
     ia: np.ndarray = field(repr=False)
     ib: np.ndarray = field(repr=False)
     n_leak: int  # flows 0..n_leak-1 are leakage, the rest nozzle ports
-    area: np.ndarray = field(repr=False)  # (n_flows, 6*n_act)
-    link_len: np.ndarray = field(repr=False)  # (n_act+1, 6*n_act): interlobe line lengths
+    area: np.ndarray = field(repr=False)  # (n_flows, rows*n_act)
+    link_len: np.ndarray = field(repr=False)  # (n_act+1, rows*n_act): chain line lengths
     mm: np.ndarray = field(repr=False)  # (n_flows, n_state)
     me: np.ndarray = field(repr=False)
     mg: np.ndarray = field(repr=False)
@@ -493,18 +494,19 @@ def _segments(geo: ChamberGeometry, n: int, nv: int, leak: Leakage, ports: Ports
         k_sc = int(np.sum(ages[:n_act] < geo.suction_close))
         k_do = int(np.sum(ages[:n_act] < geo.discharge_open))
         yield _topology(index, a, max(a, b), evs, n, nv, n_act, k_sc, k_do, P, leak, ports,
-                        suc, dis, 1.0 / geo.omega_outer)
+                        suc, dis, 1.0 / geo.omega_outer, geo.far_offsets)
         index += 1
 
 
 def _topology(index, a, b, evs, n, nv, na, k_sc, k_do, period, leak: Leakage, ports: Ports,
-              suc, dis, w) -> Segment:
+              suc, dis, w, far_offsets=()) -> Segment:
     """Flow paths and their maps into dy/dtheta for one segment (see Segment)."""
     def gi(row, k):
         return row * na + k
 
     ia, ib, rows, grp = [], [], [], []
-    ncol = 6 * na
+    n_rows = 6 + len(far_offsets)
+    ncol = n_rows * na
     link_len = np.zeros((na + 1, ncol))
     if leak.model != "none":
         cl = leak.gap_m * leak.coefficient
@@ -530,6 +532,27 @@ def _topology(index, a, b, evs, n, nv, na, k_sc, k_do, period, leak: Leakage, po
                 ib.append(node)
                 rows.append(r)
                 grp.append(gr)
+        # Lines to chambers d >= 2 periods older: slot j to slot j + d; a slot below 0 is
+        # a chamber not yet born (the space is open to suction), one past the last a
+        # chamber already discharged.
+        for d in sorted({abs(x) for x in far_offsets}):
+            up = 6 + far_offsets.index(d) if d in far_offsets else None
+            down = 6 + far_offsets.index(-d) if -d in far_offsets else None
+            for j in range(-d, na):
+                old = j + d
+                if j < 0 and old >= na:
+                    continue
+                r = np.zeros(ncol)
+                views = [(up, j), (down, old)]
+                seen = [(row, k) for row, k in views if row is not None and 0 <= k < na]
+                if not seen:
+                    continue
+                for row, k in seen:
+                    r[gi(row, k)] = cl / len(seen)
+                ia.append(min(max(j + 1, 0), na + 1))
+                ib.append(min(old + 1, na + 1))
+                rows.append(r)
+                grp.append(ACC_L_INT)
     n_leak = len(ia)
     dis_port = []
     ideal = []

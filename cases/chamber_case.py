@@ -59,7 +59,7 @@ from rotorflow.postprocess import chamber_compare as cc
 
 from . import foam
 from .chamber_mesh import ChamberDomain, ChamberMeshSpec, build_foam_mesh, patch_types
-from .gap_case import RESULT_LOG_LINES, Air, _thermophysical, looks_diverged
+from .gap_case import RESULT_LOG_LINES, Air, looks_diverged, thermophysical_properties
 from .gap_mesh import GapWalls, rotor_tip_gap
 
 log = logging.getLogger(__name__)
@@ -536,7 +536,7 @@ def write_case(case: ChamberCase, case_dir: Path) -> tuple[foam.MeshQuality, int
     mesh, quality = build_foam_mesh(case_dir, case.domain(), case.mesh)
     _write_motion(case_dir, case, mesh.fixed_height_m)
     foam.write_dict(constant / "thermophysicalProperties",
-                    _thermophysical(case.compression.gas))
+                    thermophysical_properties(case.compression.gas))
     foam.write_dict(constant / "turbulenceProperties", {"simulationType": "laminar"})
     _write_fields(case_dir, case)
     (case_dir / "case.json").write_text(json.dumps(case.description(), indent=1) + "\n")

@@ -347,7 +347,9 @@ def _fv_solution(transonic: bool) -> dict[str, Any]:
     }
 
 
-def _thermophysical(gas: Air) -> dict[str, Any]:
+def thermophysical_properties(gas: Air) -> dict[str, Any]:
+    """constant/thermophysicalProperties of ``gas``: a perfect gas with constant cp and
+    Sutherland or constant viscosity (hePsiThermo, sensible internal energy)."""
     transport = (
         {"mu": gas.mu_Pa_s, "Pr": gas.prandtl}
         if gas.transport == "const"
@@ -525,7 +527,8 @@ def write_case(case: GapCase, case_dir: Path) -> tuple[str, foam.MeshQuality, fl
     foam.write_dict(system / "fvSchemes", _fv_schemes())
     foam.write_dict(system / "fvSolution", _fv_solution(transonic))
     mesh, quality = build_foam_mesh(case_dir, case.walls, case.mesh)
-    foam.write_dict(constant / "thermophysicalProperties", _thermophysical(case.flow.gas))
+    foam.write_dict(constant / "thermophysicalProperties",
+                    thermophysical_properties(case.flow.gas))
     foam.write_dict(constant / "turbulenceProperties", _turbulence_properties(turbulence))
     _write_fields(case_dir, case, turbulence, _cell_centres(case_dir))
     return turbulence, quality, mesh.depth_m

@@ -5,10 +5,18 @@ A :class:`MeshStudy` runs one :class:`~rotorflow.cases.gap_case.GapCase` on the 
 flow with the observed order and says how far the default mesh is from it.  A study with
 a failed run has no extrapolation and gives no :class:`LeakagePoint`: failed runs are
 never used in a fit or a comparison.
+
+The leakage matrix mixes two kinds of point: :class:`MatrixPoint`, a rotor-tip gap
+between two equal convex walls, and :class:`SectionPoint`, the real gap at the sealing
+line of the case's own rotors at a chosen outer-rotor angle, whose walls may slide at
+the rotor surface speeds (:mod:`rotorflow.geometry.sealing_gap`).  Each point's name is
+its folder under the runs directory: tip names start with ``g``, section names with
+``seal-`` and a digest of the profile pair, so no two points ever share a folder.
 """
 
 from __future__ import annotations
 
+import hashlib
 import logging
 import math
 from collections.abc import Callable, Sequence
@@ -16,11 +24,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from rotorflow.errors import CaseError
+from rotorflow.geometry.pin_gerotor import PinGerotor
+from rotorflow.geometry.sealing_gap import sealing_gap_walls, sealing_wall_speeds
 from rotorflow.postprocess.leakage import LeakagePoint
 from rotorflow.postprocess.richardson import Richardson, richardson
 
 from .gap_case import GapCase, GapFlow, GapResult, run_gap_case
-from .gap_mesh import GapMeshSpec, rotor_tip_gap
+from .gap_mesh import GapMeshSpec, GapWalls, rotor_tip_gap
 
 log = logging.getLogger(__name__)
 
@@ -100,6 +110,10 @@ class MeshStudy:
             "cells": [r.cells for r in self.results],
             "run_time_s": [r.run_time_s for r in self.results],
             "imbalance": [r.imbalance for r in self.results],
+            "wall_speeds_m_s": [self.case.flow.wall_speed_lower_m_s,
+                                self.case.flow.wall_speed_upper_m_s],
+            "min_gap_um": self.case.walls.min_gap * 1e6,
+            "length_over_gap": self.results[1].gap_length_m / self.results[1].min_gap_m,
             "kind": rich.kind if rich else "failed",
             "order": rich.order if rich else math.nan,
             "order_used": rich.order_used if rich else math.nan,
@@ -161,6 +175,10 @@ def run_matrix(
 #: 1.2-1.8 % of the extrapolated mass flow (error ~ cells^-2): 20 leaves a margin under 2 %.
 TIP_MESH = GapMeshSpec(cells_across=20, cells_along=40, along_grading=20.0)
 
+#: Default mesh of a gap at a sealing line of the rotors: that of the tip gaps, whose
+#: throats have the same shape (two curved walls, locally parabolic).
+SECTION_MESH = TIP_MESH
+
 
 @dataclass(frozen=True)
 class MatrixPoint:
@@ -187,6 +205,73 @@ class MatrixPoint:
         return GapCase(walls, flow, mesh)
 
 
+@dataclass(frozen=True)
+class RotorMachine:
+    """The rotor pair that section points are cut from, and how fast it turns."""
+
+    pair: PinGerotor
+    omega_outer_rad_s: float | None = None
+    """Outer-rotor speed [rad/s] (counter-clockwise); None: unknown, no moving walls."""
+
+    @property
+    def tag(self) -> str:
+        """A short digest of the profile pair: section points of different machines in
+        one runs_dir never share a folder."""
+        p = self.pair
+        text = repr((p.lobes_outer, p.lam, p.sigma, p.diameter, p.fillet_kind,
+                     p.fillet_apex_diameter))
+        return hashlib.sha256(text.encode()).hexdigest()[:8]
+
+
+@dataclass(frozen=True)
+class SectionPoint:
+    """One point of the leakage matrix on the real gap at a sealing line of the rotors:
+    the section of :func:`rotorflow.geometry.sealing_gap.sealing_gap_walls` at outer-rotor
+    angle ``rotor_angle_deg`` with the clearance ``gap_um`` on the outer rotor; with
+    ``moving_walls`` the walls slide at the rotors' surface speeds relative to the
+    contact (:func:`~rotorflow.geometry.sealing_gap.sealing_wall_speeds`)."""
+
+    gap_um: float
+    pressure_ratio: float
+    rotor_angle_deg: float
+    machine: RotorMachine
+    moving_walls: bool = False
+    p_exit_Pa: float = 1.0e5
+    T_total_K: float = 300.0
+
+    @property
+    def outer_rpm(self) -> float:
+        return (self.machine.omega_outer_rad_s or 0.0) * 30.0 / math.pi
+
+    @property
+    def name(self) -> str:
+        motion = f"n{self.outer_rpm:.6g}rpm" if self.moving_walls else "static"
+        return (f"seal-{self.machine.tag}-a{self.rotor_angle_deg:g}deg-g{self.gap_um:g}um"
+                f"-pr{self.pressure_ratio:g}-{motion}")
+
+    @property
+    def wall_speeds_m_s(self) -> tuple[float, float]:
+        """(lower = inner rotor, upper = outer rotor) speeds along the flow."""
+        if not self.moving_walls:
+            return 0.0, 0.0
+        if self.machine.omega_outer_rad_s is None:
+            raise CaseError("moving walls need the rotor speed ([operating] speed_rpm)")
+        return sealing_wall_speeds(self.machine.pair, math.radians(self.rotor_angle_deg),
+                                   self.machine.omega_outer_rad_s)
+
+    def walls(self) -> GapWalls:
+        lower, upper = sealing_gap_walls(self.machine.pair, math.radians(self.rotor_angle_deg),
+                                         self.gap_um * 1e-6)
+        return GapWalls(lower, upper)
+
+    def case(self, mesh: GapMeshSpec = SECTION_MESH) -> GapCase:
+        lower, upper = self.wall_speeds_m_s
+        flow = GapFlow(p_total_Pa=self.pressure_ratio * self.p_exit_Pa, T_total_K=self.T_total_K,
+                       p_exit_Pa=self.p_exit_Pa, wall_speed_lower_m_s=lower,
+                       wall_speed_upper_m_s=upper)
+        return GapCase(self.walls(), flow, mesh)
+
+
 def default_matrix() -> list[MatrixPoint]:
     """Gaps 5-200 um, pressure ratios 1.1 to choked, two wall radii (so that L/h varies
     apart from the gap), and a moving-wall subset."""
@@ -198,7 +283,7 @@ def default_matrix() -> list[MatrixPoint]:
 
 def run_leakage_matrix(
     root: Path,
-    points: Sequence[MatrixPoint] | None = None,
+    points: Sequence[MatrixPoint | SectionPoint] | None = None,
     *,
     progress: Callable[[str, float], None] | None = None,
 ) -> list[MeshStudy]:
@@ -209,33 +294,113 @@ def run_leakage_matrix(
 
 # --- the workflow stage -------------------------------------------------------------------
 
-#: Keys of the case file's [cfd] section (lists; each defaults to the default matrix's).
-CFD_KEYS = ("gap_um", "pressure_ratio", "radius_mm", "wall_speed_m_s", "runs_dir")
+#: Keys of the case file's [cfd] section.  Lists, each defaulting to the default matrix's:
+#: rotor-tip gaps for every gap_um x pressure_ratio x radius_mm x wall_speed_m_s, and
+#: sealing-line sections for every rotor_gap_um x rotor_pressure_ratio x
+#: rotor_angle_deg x moving_walls.  Tip gaps are made when radius_mm or wall_speed_m_s
+#: is given or rotor_angle_deg is not; sections when rotor_angle_deg is given.
+CFD_KEYS = ("gap_um", "pressure_ratio", "radius_mm", "wall_speed_m_s", "runs_dir",
+            "rotor_angle_deg", "rotor_gap_um", "rotor_pressure_ratio", "moving_walls")
+TIP_KEYS = ("gap_um", "pressure_ratio", "radius_mm", "wall_speed_m_s")
+SECTION_KEYS = ("rotor_angle_deg", "rotor_gap_um", "rotor_pressure_ratio")
 
 
-def matrix_from_section(section: dict, where: str = "the case") -> list[MatrixPoint]:
+def _numbers(section: dict, key: str, where: str) -> list[float]:
+    values = section[key]
+    if not isinstance(values, list) or not values or not all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+            for v in values):
+        raise CaseError(f"key '{key}' in [cfd] of {where} must be a list of numbers")
+    return values
+
+
+def matrix_from_section(
+    section: dict, where: str = "the case", machine: RotorMachine | None = None
+) -> list[MatrixPoint | SectionPoint]:
     """The matrix a [cfd] section asks for: every combination of its lists.
 
     No list given: :func:`default_matrix`.  Unknown keys are a CaseError naming them.
+    Section points (``rotor_angle_deg``) need ``machine``; their sections are cut here,
+    so an angle where none exists is a CaseError naming it and the reason.
     """
     unknown = sorted(set(section) - set(CFD_KEYS))
     if unknown:
         raise CaseError(f"unknown key(s) {', '.join(unknown)} in [cfd] of {where}")
-    lists = {k: section[k] for k in CFD_KEYS[:4] if k in section}
+    lists = {k: _numbers(section, k, where) for k in TIP_KEYS + SECTION_KEYS if k in section}
+    moving = section.get("moving_walls", False)
+    moving = moving if isinstance(moving, list) else [moving]
+    if not moving or not all(isinstance(m, bool) for m in moving):
+        raise CaseError(f"key 'moving_walls' in [cfd] of {where} must be true, false or a "
+                        "list of them")
+    if "moving_walls" in section and "rotor_angle_deg" not in section:
+        raise CaseError(f"key 'moving_walls' in [cfd] of {where} needs rotor_angle_deg "
+                        "(tip gaps take wall_speed_m_s)")
     if not lists:
         return default_matrix()
-    for key, values in lists.items():
-        if not isinstance(values, list) or not values or not all(
-                isinstance(v, int | float) and not isinstance(v, bool) for v in values):
-            raise CaseError(f"key '{key}' in [cfd] of {where} must be a list of numbers")
     gaps = lists.get("gap_um", [5, 20, 50, 200])
     ratios = lists.get("pressure_ratio", [1.1, 1.5, 2.5, 4.0])
     radii = lists.get("radius_mm", [20.0])
     speeds = lists.get("wall_speed_m_s", [0.0])
-    if min(gaps) <= 0 or min(radii) <= 0 or min(ratios) <= 1:
+    angles = lists.get("rotor_angle_deg", [])
+    rotor_gaps = lists.get("rotor_gap_um", gaps)
+    rotor_ratios = lists.get("rotor_pressure_ratio", ratios)
+    if min(gaps + rotor_gaps) <= 0 or min(radii) <= 0 or min(ratios + rotor_ratios) <= 1:
         raise CaseError(f"[cfd] of {where}: gaps and radii must be > 0, pressure ratios > 1")
-    return [MatrixPoint(g, pr, r, u) for g in gaps for pr in ratios for r in radii
-            for u in speeds]
+    if any(not 0.0 <= a < 360.0 for a in angles):
+        raise CaseError(f"key 'rotor_angle_deg' in [cfd] of {where}: angles must lie in "
+                        f"[0, 360), got {angles}")
+    tips = not angles or "radius_mm" in section or "wall_speed_m_s" in section
+    points: list[MatrixPoint | SectionPoint] = []
+    if tips:
+        points += [MatrixPoint(g, pr, r, u) for g in gaps for pr in ratios for r in radii
+                   for u in speeds]
+    if angles:
+        if machine is None:
+            raise CaseError(f"rotor_angle_deg in [cfd] of {where} needs the case's [machine]")
+        if any(moving) and machine.omega_outer_rad_s is None:
+            raise CaseError(f"moving_walls in [cfd] of {where} needs the rotor speed: "
+                            "[operating] speed_rpm")
+        for a in angles:
+            for g in rotor_gaps:
+                try:  # cut each section once: a bad angle is named before anything runs
+                    sealing_gap_walls(machine.pair, math.radians(a), g * 1e-6)
+                except CaseError as exc:
+                    raise CaseError(f"rotor_angle_deg = {a:g} in [cfd] of {where}, gap "
+                                    f"{g:g} um: {exc}") from None
+        points += [SectionPoint(g, pr, a, machine, m) for a in angles for g in rotor_gaps
+                   for pr in rotor_ratios for m in dict.fromkeys(moving)]
+    return points
+
+
+def validate_section(data: dict, where: str, pair: PinGerotor | None) -> None:
+    """Check a case file's [cfd] section when the case is loaded (nothing is run).
+
+    Section points are cut from ``pair``; moving walls need [operating] speed_rpm, whose
+    conversion to the outer-rotor speed (which may need the power split) waits for the
+    stage, so a placeholder speed stands in for it here.
+    """
+    if not isinstance(data["cfd"], dict):
+        raise CaseError(f"[cfd] in {where} must be a table")
+    speed = data.get("operating", {}).get("speed_rpm")
+    machine = None if pair is None else RotorMachine(pair, None if speed is None else 1.0)
+    matrix_from_section(data["cfd"], where, machine)
+
+
+def rotor_machine(case, *, with_speed: bool = True) -> RotorMachine:
+    """The case's rotor pair and outer-rotor speed: [operating] speed_rpm is the speed of
+    the driven rotor ([operating] driven; "auto" decides by the power split as the chamber
+    table does); the outer rotor turns N2/N1 times as fast as a driven inner rotor."""
+    speed = case.raw.get("operating", {}).get("speed_rpm")
+    if speed is None or not with_speed:
+        return RotorMachine(case.pair)
+    driven = case.driven
+    if driven == "auto":
+        from rotorflow.geometry.forces import power_split
+        from rotorflow.geometry.summary import build_machine
+
+        driven = power_split(build_machine(case), case.volume_ratio).driven
+    ratio = 1.0 / case.pair.m21 if driven == "inner" else 1.0
+    return RotorMachine(case.pair, float(speed) * ratio * math.pi / 30.0)
 
 
 def run_stage(ctx) -> dict:
@@ -253,7 +418,12 @@ def run_stage(ctx) -> dict:
 
     section = ctx.raw.get("cfd", {})
     where = str(ctx.case_path)
-    points = matrix_from_section(section, where)
+    machine = None
+    if "rotor_angle_deg" in section:
+        moving = section.get("moving_walls", False)
+        machine = rotor_machine(ctx.case, with_speed=moving is True or (
+            isinstance(moving, list) and any(moving)))
+    points = matrix_from_section(section, where, machine)
     runs = Path(section["runs_dir"]) if "runs_dir" in section else ctx.out / "runs"
     if not runs.is_absolute():
         runs = Path(ctx.case_path).parent / runs

@@ -15,9 +15,19 @@ Definitions (SI):
                       be evaluated directly by the quasi-1D model
     gap length        L: the stretch where the gap is at most twice its minimum (a
                       parallel channel: its length)
-    correlation       A Cd^2 + b X Cd = 1 with A = sum_i a_i phi_i(PR) (phi: "1",
-                      "ln(PR)", "1/PR") and X = 24 (L/h) psi^2 / (Re (1 - PR^-2)),
-                      psi = m_id / (h sqrt(p_up rho_up)); so Cd = 2 / (bX + sqrt((bX)^2 + 4A))
+    wall speed        U: mean of the two walls' speeds along the flow (from upstream to
+                      downstream), in the frame where the gap keeps its shape (at a
+                      sealing line: relative to the moving contact point)
+    wall speed ratio  V = U sqrt(rho_up / p_up) = U / sqrt(R T_up)
+    Couette parameter W = rho_c U h / m_id = V kappa(PR) / psi, the flow the walls drag
+                      through the gap over the ideal flow, with rho_c = kappa rho_up,
+                      kappa = (2/3) (1 - PR^-3) / (1 - PR^-2) (-> 1 at PR -> 1): the density
+                      that carries the drag flow of isothermal lubrication flow
+    correlation       A Cd|Cd| + b X (Cd - w W) = 1 with A = sum_i a_i phi_i(PR) (phi: "1",
+                      "ln(PR)", "1/PR"), X = 24 (L/h) psi^2 / (Re (1 - PR^-2)),
+                      psi = m_id / (h sqrt(p_up rho_up)); so with q = 1 + b w X W,
+                      Cd = 2 q / (bX + sqrt((bX)^2 + 4 A |q|)); w = 0 for static walls
+                      (and in fits saved before the wall term existed)
 """
 
 from __future__ import annotations
@@ -75,6 +85,16 @@ class LeakagePoint:
     @property
     def flow_coefficient(self) -> float:
         return self.mass_flow_kg_s_m / self.ideal_mass_flow
+
+    @property
+    def wall_speed_ratio(self) -> float:
+        """V = U sqrt(rho_up / p_up): the wall speed over sqrt(R T_up)."""
+        return self.wall_speed_m_s / math.sqrt(self.R_J_kgK * self.T_up_K)
+
+    @property
+    def couette_parameter(self) -> float:
+        """W = rho_c U h / m_id (see the Definitions)."""
+        return float(couette_parameter(self.wall_speed_ratio, self.pressure_ratio, self.gamma))
 
 
 # --- reference formulas -------------------------------------------------------------------
@@ -240,6 +260,18 @@ def mismatches(
 # (m_id = h psi sqrt(p_up rho_up)); at PR -> 1 both forms agree.  The fit finds b (how
 # long the curved gap is in effect, relative to L) and A as a linear function of
 # INERTIAL_FEATURES of the pressure ratio; both enter linearly, so it is least squares.
+#
+# Walls sliding along the flow at mean speed U drag rho U h through a channel whatever
+# the pressure (Couette flow): the friction loss acts on the pressure-driven part only,
+#
+#     A Cd|Cd| + b X (Cd - w W) = 1,    W = rho_c U h / m_id,
+#
+# with w = 1 for a plane channel (4/3 for the parabolic throat of two cylinders, whose
+# drag flow is U h_min I2/I3 with I_n = integral of h^-n) and rho_c the density that
+# carries the drag flow (drag_density_ratio).  In the viscous limit Cd = 1/(bX) + w W,
+# lubrication theory's pressure flow plus drag flow; in the inertial limit the walls do
+# nothing.  b w is one more linear coefficient (of -X W), so the fit stays least squares.
+# Cd|Cd| keeps the loss opposed to the flow when walls running backwards reverse it.
 
 #: Functions of the pressure ratio whose combination is 1 / Cd0^2 of the inviscid part.
 INERTIAL_FEATURES: dict[str, Callable[[np.ndarray], np.ndarray]] = {
@@ -259,6 +291,27 @@ def nozzle_psi(pressure_ratio, gamma: float = 1.4):
     return np.sqrt(2 * gamma / (gamma - 1) * (x ** (2 / gamma) - x ** ((gamma + 1) / gamma)))
 
 
+def drag_density_ratio(pressure_ratio):
+    """kappa = rho_c / rho_up = (2/3) (1 - PR^-3) / (1 - PR^-2), in (2/3, 1].
+
+    In isothermal lubrication flow between walls moving at U, m' R T = -h^3 p p' / (12 mu)
+    + U h p; to first order in U the walls add U h rho_c to the pressure flow, rho_c the
+    mean of p^2 over the mean of p across the pressure drop, over R T.
+    """
+    r = 1.0 / np.asarray(pressure_ratio, dtype=float)
+    near = np.abs(1.0 - r) < 1e-6  # the 0/0 limit: (2/3)(1 + r + r^2)/(1 + r) -> 1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        kappa = np.where(near, 1.0, (2.0 / 3.0) * (1.0 - r**3) / (1.0 - r**2))
+    return kappa
+
+
+def couette_parameter(wall_speed_ratio, pressure_ratio, gamma: float = 1.4):
+    """W = V kappa(PR) / psi(PR): the wall-dragged flow rho_c U h over the ideal flow."""
+    pr = np.asarray(pressure_ratio, dtype=float)
+    return np.asarray(wall_speed_ratio, dtype=float) * drag_density_ratio(pr) / nozzle_psi(
+        pr, gamma)
+
+
 def viscous_parameter(reynolds, pressure_ratio, length_over_gap, gamma: float = 1.4):
     """X = 24 (L/h) psi^2 / (Re (1 - 1/PR^2)): Cd of laminar lubrication flow is 1 / X."""
     pr = np.asarray(pressure_ratio, dtype=float)
@@ -268,7 +321,7 @@ def viscous_parameter(reynolds, pressure_ratio, length_over_gap, gamma: float = 
 
 @dataclass(frozen=True)
 class FlowCoefficientFit:
-    """Cd(Re, PR, L/h) from A(PR) Cd^2 + b X Cd = 1 (see the comment above), fitted to CFD."""
+    """Cd(Re, PR, L/h, V) from A(PR) Cd|Cd| + b X (Cd - w W) = 1 (see the comment above)."""
 
     inertial_features: tuple[str, ...]
     inertial: tuple[float, ...]
@@ -277,31 +330,57 @@ class FlowCoefficientFit:
     """b: the friction of the gap relative to a plane channel of length L."""
     gamma: float = 1.4
     ranges: dict[str, tuple[float, float]] = field(default_factory=dict)
-    """The range of Re, PR and L/h the fit saw; outside it Cd is an extrapolation."""
+    """The range of Re, PR, L/h and V the fit saw; outside it Cd is an extrapolation."""
     leave_out_errors: tuple[float, ...] = ()
     """Mass-flow errors of each point predicted by a fit without it (model/CFD - 1)."""
     definitions: str = DEFINITIONS
+    wall: float = 0.0
+    """w: the wall-dragged flow relative to rho_c U h_min (0: walls not fitted)."""
+    leave_out_moving: tuple[bool, ...] = ()
+    """Which of the leave_out_errors belong to points with moving walls."""
 
-    def flow_coefficient(self, reynolds, pressure_ratio, length_over_gap):
+    def flow_coefficient(self, reynolds, pressure_ratio, length_over_gap,
+                         wall_speed_ratio=0.0):
+        """Cd at gap Reynolds number, pressure ratio, L/h and wall speed ratio
+        V = U sqrt(rho_up / p_up) (U along the flow; 0: static walls)."""
         pr = np.asarray(pressure_ratio, dtype=float)
         a = sum(c * INERTIAL_FEATURES[f](pr) for f, c in zip(self.inertial_features,
                                                                self.inertial, strict=True))
         b = self.viscous * viscous_parameter(reynolds, pr, length_over_gap, self.gamma)
-        cd = 2.0 / (b + np.sqrt(b * b + 4.0 * a))  # the positive root, free of cancellation
+        q = 1.0
+        if self.wall != 0.0 and np.any(np.asarray(wall_speed_ratio) != 0.0):
+            q = 1.0 + self.wall * b * couette_parameter(wall_speed_ratio, pr, self.gamma)
+        # The root of A Cd|Cd| + b Cd = q with the sign of q, free of cancellation.
+        cd = 2.0 * q / (b + np.sqrt(b * b + 4.0 * a * np.abs(q)))
         return float(cd) if np.ndim(cd) == 0 else cd
 
     def model(self) -> Model:
         """The fit as a leakage model for :func:`compare`."""
         return lambda p: p.ideal_mass_flow * self.flow_coefficient(
-            p.reynolds, p.pressure_ratio, p.length_over_gap)
+            p.reynolds, p.pressure_ratio, p.length_over_gap, p.wall_speed_ratio)
+
+    def leave_out_summary(self) -> dict[str, dict[str, float | int]]:
+        """Max and RMS left-out errors of all points, static and moving walls apart."""
+        err = np.asarray(self.leave_out_errors, dtype=float)
+        moving = (np.asarray(self.leave_out_moving, dtype=bool) if self.leave_out_moving
+                  else np.zeros(len(err), dtype=bool))
+        out = {}
+        for name, sel in (("all", np.ones(len(err), dtype=bool)), ("static", ~moving),
+                          ("moving", moving)):
+            e = err[sel]
+            out[name] = {"points": int(sel.sum()),
+                         "max": float(np.max(np.abs(e))) if len(e) else math.nan,
+                         "rms": float(np.sqrt(np.mean(e**2))) if len(e) else math.nan}
+        return out
 
     def to_json(self) -> str:
         d = asdict(self)
-        d["kind"] = "rotorflow flow-coefficient fit: A(PR) Cd^2 + b X Cd = 1"
+        d["kind"] = "rotorflow flow-coefficient fit: A(PR) Cd|Cd| + b X (Cd - w W) = 1"
         return json.dumps(d, indent=2) + "\n"
 
     @classmethod
     def from_json(cls, text: str) -> FlowCoefficientFit:
+        """A saved fit; files written before the wall term existed load with w = 0."""
         d = json.loads(text)
         unknown = [f for f in d["inertial_features"] if f not in INERTIAL_FEATURES]
         if unknown:
@@ -314,6 +393,8 @@ class FlowCoefficientFit:
             ranges={k: (float(v[0]), float(v[1])) for k, v in d.get("ranges", {}).items()},
             leave_out_errors=tuple(float(e) for e in d.get("leave_out_errors", ())),
             definitions=d.get("definitions", ""),
+            wall=float(d.get("wall", 0.0)),
+            leave_out_moving=tuple(bool(m) for m in d.get("leave_out_moving", ())),
         )
 
     def save(self, path: Path) -> Path:
@@ -328,26 +409,42 @@ class FlowCoefficientFit:
         return cls.from_json(Path(path).read_text())
 
 
-def _solve(points: Sequence[LeakagePoint], features: Sequence[str],
-           gamma: float) -> FlowCoefficientFit:
+def _solve(points: Sequence[LeakagePoint], features: Sequence[str], gamma: float,
+           wall: bool) -> FlowCoefficientFit:
     pr = np.array([p.pressure_ratio for p in points])
     cd = np.array([p.flow_coefficient for p in points])
     x = viscous_parameter([p.reynolds for p in points], pr,
                           [p.length_over_gap for p in points], gamma)
-    # Residual A Cd^2 + b X Cd - 1 changes by (1 + A Cd^2) dCd/Cd, between one and two
-    # times the relative error of Cd: plain least squares weighs points nearly evenly.
-    design = np.column_stack([cd**2 * INERTIAL_FEATURES[f](pr) for f in features] + [x * cd])
-    coef, *_ = np.linalg.lstsq(design, np.ones(len(points)), rcond=None)
-    return FlowCoefficientFit(tuple(features), tuple(float(c) for c in coef[:-1]),
-                              float(coef[-1]), gamma)
+    # Residual A Cd|Cd| + b X Cd - bw X W - 1 changes by (1 + A Cd^2) dCd/Cd, between one
+    # and two times the relative error of Cd: plain least squares weighs points evenly.
+    columns = [cd * np.abs(cd) * INERTIAL_FEATURES[f](pr) for f in features] + [x * cd]
+    if wall:
+        columns.append(-x * np.array([p.couette_parameter for p in points]))
+    coef, *_ = np.linalg.lstsq(np.column_stack(columns), np.ones(len(points)), rcond=None)
+    n = len(features)
+    b = float(coef[n])
+    # A column of zeros (no moving wall left in a leave-one-out fit) gets a zero
+    # coefficient from lstsq: w = 0, the static form.
+    w = float(coef[n + 1]) / b if wall and b != 0.0 else 0.0
+    return FlowCoefficientFit(tuple(features), tuple(float(c) for c in coef[:n]), b, gamma,
+                              wall=w)
 
 
 def fit_flow_coefficient(
-    points: Sequence[LeakagePoint], features: Sequence[str] = DEFAULT_INERTIAL
+    points: Sequence[LeakagePoint],
+    features: Sequence[str] = DEFAULT_INERTIAL,
+    *,
+    wall: bool | None = None,
 ) -> FlowCoefficientFit:
-    """Least-squares fit of the series-resistance form, with leave-one-out errors."""
+    """Least-squares fit of the series-resistance form, with leave-one-out errors.
+
+    ``wall``: fit the wall-drag coefficient w (default: when any point has moving walls;
+    False fits the static form to every point, as the correlation did before).
+    """
     pts = [p for p in points if math.isfinite(p.mass_flow_kg_s_m) and p.mass_flow_kg_s_m > 0]
-    n_coef = len(features) + 1
+    moving = [p.wall_speed_m_s != 0 for p in pts]
+    wall = any(moving) if wall is None else wall
+    n_coef = len(features) + 1 + int(wall)
     if len(pts) < n_coef + 1:
         raise ValueError(f"{len(pts)} valid points cannot fit {n_coef} coefficients "
                          "and leave one out")
@@ -355,10 +452,10 @@ def fit_flow_coefficient(
     if len(gammas) != 1:
         raise ValueError("all points of a fit must share one gas (gamma)")
     gamma = gammas.pop()
-    fit = _solve(pts, tuple(features), gamma)
+    fit = _solve(pts, tuple(features), gamma, wall)
     loo = []
     for i, p in enumerate(pts):
-        pred = _solve(pts[:i] + pts[i + 1 :], tuple(features), gamma).model()(p)
+        pred = _solve(pts[:i] + pts[i + 1 :], tuple(features), gamma, wall).model()(p)
         loo.append(pred / p.mass_flow_kg_s_m - 1.0)
 
     def span(values) -> tuple[float, float]:
@@ -371,8 +468,10 @@ def fit_flow_coefficient(
             "reynolds": span(p.reynolds for p in pts),
             "pressure_ratio": span(p.pressure_ratio for p in pts),
             "length_over_gap": span(p.length_over_gap for p in pts),
+            "wall_speed_ratio": span(p.wall_speed_ratio for p in pts),
         },
         leave_out_errors=tuple(float(e) for e in loo),
+        leave_out_moving=tuple(moving),
     )
 
 
@@ -388,30 +487,41 @@ def write_report(
 ) -> dict:
     """Fit the flow coefficient and compare every model with the CFD points.
 
-    The fit uses the points with stationary walls (the correlation has no wall-speed
-    term); the moving-wall points are compared like the others, which shows what the
-    wall motion does to each model's error.  Writes ``leakage_errors.csv``,
-    ``leakage_errors.md``, ``flow_coefficient.json`` and ``flow_coefficient.png``;
-    returns the summary figures.
+    The fit ("cfd-calibrated") uses every point, with the wall-drag term when some walls
+    move; its left-out errors are reported for static and moving walls apart.  Where
+    there are both, the static form fitted to the static points alone
+    ("cfd-calibrated-static", the correlation without its wall term) is compared too,
+    which shows what the wall motion does to a correlation that ignores it.  Writes
+    ``leakage_errors.csv``, ``leakage_errors.md``, ``flow_coefficient.json`` and
+    ``flow_coefficient.png``; returns the summary figures.
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    fit = fit_flow_coefficient([p for p in points if p.wall_speed_m_s == 0], features)
+    fit = fit_flow_coefficient(points, features)
     fit.save(out_dir / "flow_coefficient.json")
-    table = compare(points, {**models, "cfd-calibrated": fit.model()})
+    fitted = {"cfd-calibrated": fit.model()}
+    static = [p for p in points if p.wall_speed_m_s == 0]
+    if fit.wall != 0.0 and len(static) > len(features) + 2:
+        fitted["cfd-calibrated-static"] = fit_flow_coefficient(static, features,
+                                                               wall=False).model()
+    table = compare(points, {**models, **fitted})
     table.write_csv(out_dir / "leakage_errors.csv")
-    loo = np.asarray(fit.leave_out_errors)
-    text = table.markdown() + (
-        f"\ncfd-calibrated left-out prediction error: max {np.max(np.abs(loo)):.1%}, "
-        f"RMS {np.sqrt(np.mean(loo**2)):.1%} over {len(loo)} points\n")
-    (out_dir / "leakage_errors.md").write_text(text)
+    loo = fit.leave_out_summary()
+    lines = [f"\ncfd-calibrated: w = {fit.wall:.4g}; left-out prediction error:"]
+    for name in ("all", "static", "moving"):
+        s = loo[name]
+        if s["points"]:
+            lines.append(f"- {name} walls: max {s['max']:.1%}, RMS {s['rms']:.1%} over "
+                         f"{s['points']} points")
+    (out_dir / "leakage_errors.md").write_text(table.markdown() + "\n".join(lines) + "\n")
     _plot_fit(points, fit, out_dir / "flow_coefficient.png")
     return {
         "models": [asdict(s) for s in table.summary()],
         "fit": {"inertial_features": fit.inertial_features, "inertial": fit.inertial,
-                "viscous": fit.viscous,
-                "leave_out_max_error": float(np.max(np.abs(loo))),
-                "leave_out_rms_error": float(np.sqrt(np.mean(loo**2)))},
+                "viscous": fit.viscous, "wall": fit.wall,
+                "leave_out_max_error": loo["all"]["max"],
+                "leave_out_rms_error": loo["all"]["rms"],
+                "leave_out": loo},
     }
 
 
@@ -423,8 +533,8 @@ def _plot_fit(points: Sequence[LeakagePoint], fit: FlowCoefficientFit, path: Pat
 
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     cd = np.array([p.flow_coefficient for p in points])
-    pred = np.array([fit.flow_coefficient(p.reynolds, p.pressure_ratio, p.length_over_gap)
-                     for p in points])
+    pred = np.array([fit.flow_coefficient(p.reynolds, p.pressure_ratio, p.length_over_gap,
+                                          p.wall_speed_ratio) for p in points])
     re = np.array([p.reynolds for p in points])
     pr = np.array([p.pressure_ratio for p in points])
     moving = np.array([p.wall_speed_m_s != 0 for p in points])
@@ -439,6 +549,11 @@ def _plot_fit(points: Sequence[LeakagePoint], fit: FlowCoefficientFit, path: Pat
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def _largest(values) -> float:
+    v = np.asarray([x for x in values if x is not None], dtype=float)
+    return float(np.max(v)) if len(v) and np.all(np.isfinite(v)) else math.nan
 
 
 def report_section(artifact: Path, report_dir: Path, case):
@@ -456,8 +571,9 @@ def report_section(artifact: Path, report_dir: Path, case):
                     + "</p>")
     body.append(table(
         ["point", "mesh convergence", "observed order", "default mesh vs extrapolated",
-         "extrapolated kg/s/m"],
-        [[s["name"], s["kind"], s["order"], s["default_error"], s["extrapolated_kg_s_m"]]
+         "extrapolated kg/s/m", "largest inlet/outlet imbalance", "run time s (3 meshes)"],
+        [[s["name"], s["kind"], s["order"], s["default_error"], s["extrapolated_kg_s_m"],
+          _largest(s.get("imbalance", [])), float(np.sum(s.get("run_time_s", [math.nan])))]
          for s in studies],
         ["failed" if not s["ok"] else "" for s in studies]))
     errors = artifact / "leakage_errors.csv"
@@ -465,9 +581,11 @@ def report_section(artifact: Path, report_dir: Path, case):
         with errors.open() as fh:
             rows = list(csv.DictReader(fh))
         models = [k[: -len("_error")] for k in rows[0] if k.endswith("_error")]
-        body.append(table(["point", "Re", "PR", "L/h", "CFD Cd"] + [f"{m} error" for m in models],
+        body.append(table(["point", "Re", "PR", "L/h", "wall speed m/s", "CFD Cd"]
+                          + [f"{m} error" for m in models],
                           [[r["point"], float(r["reynolds"]), float(r["pressure_ratio"]),
-                            float(r["L_over_h"]), float(r["cfd_Cd"])]
+                            float(r["L_over_h"]), float(r.get("wall_speed_m_s", 0.0)),
+                            float(r["cfd_Cd"])]
                            + [float(r[f"{m}_error"]) for m in models] for r in rows]))
         body.append(f"<pre>{esc((artifact / 'leakage_errors.md').read_text())}</pre>")
     if (artifact / "flow_coefficient.png").is_file():
@@ -478,5 +596,5 @@ def report_section(artifact: Path, report_dir: Path, case):
         fit = FlowCoefficientFit.load(artifact / "flow_coefficient.json")
         body.append(f"<p>Fitted correlation ({esc(fit.definitions)}): inertial "
                     f"{esc(dict(zip(fit.inertial_features, fit.inertial, strict=True)))}, "
-                    f"viscous b = {fit.viscous:.4g}.</p>")
+                    f"viscous b = {fit.viscous:.4g}, wall drag w = {fit.wall:.4g}.</p>")
     return Section("CFD: leakage through clearance gaps", "".join(body))

@@ -14,10 +14,11 @@ from rotorflow.postprocess.leakage import LeakagePoint
 R_AIR, GAMMA = 287.05, 1.4
 
 
-def point(name="p", gap=50e-6, length=1e-3, pr=2.0, mass_flow=math.nan, mu=1.85e-5):
+def point(name="p", gap=50e-6, length=1e-3, pr=2.0, mass_flow=math.nan, mu=1.85e-5,
+          wall=0.0):
     return LeakagePoint(name=name, gap_m=gap, length_m=length, p_up_Pa=1e5 * pr, T_up_K=300.0,
                         p_down_Pa=1e5, mu_Pa_s=mu, R_J_kgK=R_AIR, gamma=GAMMA,
-                        mass_flow_kg_s_m=mass_flow)
+                        wall_speed_m_s=wall, mass_flow_kg_s_m=mass_flow)
 
 
 # --- reference formulas -------------------------------------------------------------------
@@ -133,6 +134,92 @@ def test_fit_recovers_a_known_correlation_and_predicts_left_out_points():
     assert (lo, hi) == pytest.approx((1.1, 2.5))
 
 
+WALL = 1.3  # w: the drag flow over rho_c U h_min (4/3 for a parabolic throat)
+
+
+def moving_points(speeds=(-5.0, 15.0, 40.0)):
+    """Points whose Cd follows A Cd|Cd| + b X (Cd - w W) = 1 with walls moving."""
+    truth = leakage.FlowCoefficientFit(("1", "ln(PR)"), TRUE[:2], TRUE[2], wall=WALL)
+    pts = []
+    for gap in (20e-6, 50e-6, 200e-6):  # at 5 um walls running back reverse the flow
+        for pr in (1.1, 2.5):
+            for u in speeds:
+                p = point(f"g{gap}-pr{pr}-u{u}", gap=gap, length=1e-3, pr=pr, wall=u)
+                pts.append(point(p.name, gap=gap, length=1e-3, pr=pr, wall=u,
+                                 mass_flow=truth.model()(p)))
+    return pts
+
+
+def test_wall_term_limits_are_couette_and_nothing():
+    # Viscous limit (A = 0, b = 1, w = 1): Cd = 1/X + W, i.e. lubrication pressure flow
+    # plus the drag flow rho_c U h.  At PR -> 1, rho_c -> rho_up.
+    fit = leakage.FlowCoefficientFit(("1",), (0.0,), 1.0, wall=1.0)
+    p = point(gap=10e-6, length=1e-3, pr=1.0001, wall=5.0)
+    rho = p.p_up_Pa / (R_AIR * p.T_up_K)
+    expected = leakage.plane_poiseuille_mass_flow(p) + rho * 5.0 * p.gap_m
+    assert fit.model()(p) == pytest.approx(expected, rel=1e-4)  # rho_c/rho_up - 1 ~ 1e-4
+    assert leakage.drag_density_ratio(np.array([1.0, 1.0 + 1e-9, 1e9])) == pytest.approx(
+        [1.0, 1.0, 2.0 / 3.0], rel=1e-6)
+    # Inviscid limit (b = 0): the walls change nothing.
+    nozzle = leakage.FlowCoefficientFit(("1",), (1 / 0.64,), 0.0, wall=1.0)
+    assert nozzle.flow_coefficient(10.0, 2.0, 50.0, 0.3) == pytest.approx(0.8)
+    # Walls running backwards faster than the pressure pushes: the flow reverses, and
+    # the coefficient stays a root of A Cd|Cd| + b X (Cd - w W) = 1.
+    fit = leakage.FlowCoefficientFit(("1",), (1.5,), 0.8, wall=1.0)
+    re, pr, lh, v = 20.0, 1.1, 200.0, -0.5
+    cd = fit.flow_coefficient(re, pr, lh, v)
+    x = leakage.viscous_parameter(re, pr, lh)
+    w = leakage.couette_parameter(v, pr)
+    assert cd < 0
+    assert 1.5 * cd * abs(cd) + 0.8 * x * (cd - w) == pytest.approx(1.0, rel=1e-12)
+
+
+def test_fit_with_wall_term_recovers_it_and_predicts_what_the_static_form_cannot():
+    static, moving = synthetic_points(), moving_points()
+    fit = leakage.fit_flow_coefficient(static + moving)
+    np.testing.assert_allclose([*fit.inertial, fit.viscous, fit.wall], [*TRUE, WALL],
+                               rtol=1e-9)
+    loo = fit.leave_out_summary()
+    assert loo["moving"]["points"] == len(moving) and loo["moving"]["max"] < 1e-9
+    assert fit.ranges["wall_speed_ratio"][0] < 0 < fit.ranges["wall_speed_ratio"][1]
+    # The correlation without the wall term, fitted to the same points, cannot follow
+    # the walls: its left-out errors on the moving points are large (the check can fail).
+    old = leakage.fit_flow_coefficient(static + moving, wall=False)
+    assert old.wall == 0.0
+    assert old.leave_out_summary()["moving"]["max"] > 0.05
+    # ...and fitted to the static points alone it predicts the moving ones no better.
+    only_static = leakage.fit_flow_coefficient(static)
+    errors = [only_static.model()(p) / p.mass_flow_kg_s_m - 1 for p in moving]
+    assert max(abs(e) for e in errors) > 0.05
+
+
+def test_fit_without_moving_points_has_no_wall_term():
+    fit = leakage.fit_flow_coefficient(synthetic_points())
+    assert fit.wall == 0.0 and not any(fit.leave_out_moving)
+    # With a wall speed it then predicts what static walls would pass.
+    assert fit.flow_coefficient(50.0, 1.5, 20.0, 0.1) == fit.flow_coefficient(50.0, 1.5, 20.0)
+
+
+def test_fit_saved_before_the_wall_term_loads_with_it_zero(tmp_path):
+    import json
+
+    fit = leakage.fit_flow_coefficient(synthetic_points())
+    old = json.loads(fit.to_json())
+    for key in ("wall", "leave_out_moving"):
+        del old[key]
+    old["ranges"].pop("wall_speed_ratio")
+    back = leakage.FlowCoefficientFit.from_json(json.dumps(old))
+    assert back.wall == 0.0 and back.leave_out_moving == ()
+    assert back.flow_coefficient(50.0, 1.3, 10.0) == fit.flow_coefficient(50.0, 1.3, 10.0)
+    assert back.leave_out_summary()["static"]["points"] == len(fit.leave_out_errors)
+    # The recorded fit of the chamber case, written by the first version, still loads.
+    from pathlib import Path
+
+    recorded = Path(__file__).parent / "data" / "cfd" / "chamber" / "flow_coefficient.json"
+    assert "wall" not in json.loads(recorded.read_text())
+    assert leakage.FlowCoefficientFit.load(recorded).wall == 0.0
+
+
 def test_fit_leave_out_error_reveals_noisy_data():
     # 2 % scatter in the "CFD" must show up as leave-out errors of that size: the check
     # on the correlation is not one that passes everything.
@@ -186,17 +273,24 @@ def test_quasi1d_nozzle_agrees_with_the_reference_nozzle():
 
 def test_report_writes_tables_fit_and_plot(tmp_path):
     pts = synthetic_points()
-    moving = point("moving", pr=1.5, mass_flow=0.9 * point(pr=1.5).ideal_mass_flow)
-    moving = LeakagePoint(**{**moving.__dict__, "wall_speed_m_s": 30.0})
-    summary = leakage.write_report([*pts, moving], tmp_path, {"nozzle": leakage.nozzle_model()})
+    moving = moving_points()
+    summary = leakage.write_report([*pts, *moving], tmp_path,
+                                   {"nozzle": leakage.nozzle_model()})
     for name in ("leakage_errors.csv", "leakage_errors.md", "flow_coefficient.json",
                  "flow_coefficient.png"):
         assert (tmp_path / name).stat().st_size > 0
-    # The fit saw only the stationary-wall points, which follow the correlation exactly.
+    # Every point follows the correlation with its wall term exactly.
     assert summary["fit"]["leave_out_max_error"] < 1e-9
-    assert len(leakage.FlowCoefficientFit.load(tmp_path / "flow_coefficient.json")
-               .leave_out_errors) == len(pts)
-    assert "cfd-calibrated" in (tmp_path / "leakage_errors.md").read_text()
+    assert summary["fit"]["wall"] == pytest.approx(WALL, rel=1e-9)
+    loo = summary["fit"]["leave_out"]
+    assert (loo["static"]["points"], loo["moving"]["points"]) == (len(pts), len(moving))
+    fit = leakage.FlowCoefficientFit.load(tmp_path / "flow_coefficient.json")
+    assert len(fit.leave_out_errors) == len(pts) + len(moving)
+    text = (tmp_path / "leakage_errors.md").read_text()
+    assert "cfd-calibrated" in text and "moving walls" in text
+    # The static form, fitted to the static points, is shown against the moving ones.
+    static = next(m for m in summary["models"] if m["model"] == "cfd-calibrated-static")
+    assert static["max_abs_error"] > 0.05
 
 
 def test_report_section_names_failed_studies(tmp_path):

@@ -15,15 +15,19 @@ from .conftest import CASES
 def test_cfd_case_loads_and_its_stage_is_registered():
     case = load_case(CASES / "cfd_leakage.toml")
     assert case.raw["cfd"]["gap_um"] == [10, 50]
+    assert case.raw["cfd"]["rotor_angle_deg"] == [240, 300]
     stage = REGISTRY["cfd.leakage"]
-    assert stage.reads == ("cfd",)  # the generic matrix does not depend on the machine
+    # Sealing-line sections are cut from the machine and move at the operating speed.
+    assert {"cfd", "machine", "operating.speed_rpm", "operating.driven"} <= set(stage.reads)
     assert stage.missing({}) and stage.missing(case.raw) is None
 
 
 @pytest.mark.parametrize("old, new, word", [
     ("gap_um = [10, 50]", "gap_um = [10, 50]\nmesh = 3", "mesh"),
     ("gap_um = [10, 50]", "gap_um = [-10]", "gaps"),
-    ("pressure_ratio = [1.2, 2.0, 4.0]", "pressure_ratio = 2.0", "list"),
+    ("pressure_ratio = [1.2, 4.0]", "pressure_ratio = 2.0", "list"),
+    ("rotor_angle_deg = [240, 300]", "rotor_angle_deg = [240, 330]", "330"),
+    ("speed_rpm = 6000", "", "speed_rpm"),
 ])
 def test_bad_cfd_section_exits_2_with_one_line(tmp_path, old, new, word):
     case = tmp_path / "case.toml"

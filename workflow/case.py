@@ -185,7 +185,7 @@ def load_case(path: Path) -> Case:
     driven = op.get("driven", "auto")
     if driven not in ("inner", "outer", "auto"):
         raise CaseError(f"driven must be 'inner', 'outer' or 'auto' in {where}, got {driven!r}")
-    validate_stage_sections(data, path)
+    validate_stage_sections(data, path, pair)
     return Case(
         name=path.stem,
         path=path,
@@ -202,8 +202,9 @@ def load_case(path: Path) -> Case:
     )
 
 
-def validate_stage_sections(data: dict, path: Path) -> None:
-    """Hand the sections of later stages to their owners' validators.
+def validate_stage_sections(data: dict, path: Path, pair: PinGerotor | None = None) -> None:
+    """Hand the sections of later stages to their owners' validators (``pair``: the
+    case's rotors, for the sections cut from them).
 
     [operating] keys other than the geometry's go to the quasi-1D settings; until a
     stage that owns a section exists, any key in it is reported as unknown.
@@ -233,11 +234,9 @@ def validate_stage_sections(data: dict, path: Path) -> None:
 
         Export.from_section(data["export"], str(path))
     if "cfd" in data:  # owned by the CFD leakage stage
-        from rotorflow.cases.gap_study import matrix_from_section
+        from rotorflow.cases.gap_study import validate_section
 
-        if not isinstance(data["cfd"], dict):
-            raise CaseError(f"[cfd] in {path} must be a table")
-        matrix_from_section(data["cfd"], str(path))
+        validate_section(data, str(path), pair)
     if "cfd_chamber" in data:  # owned by the CFD chamber stage
         from rotorflow.cases.chamber_case import ChamberSettings
 

@@ -276,10 +276,14 @@ register(Stage(
     name="cfd.leakage",
     run="rotorflow.cases.gap_study:run_stage",
     description="OpenFOAM leakage matrix, Richardson studies, quasi-1D comparison, Cd fit",
-    # The matrix is generic (gap, pressure ratio, wall radius, wall speed): it reads only
-    # [cfd]; its runs are reused point by point through [cfd] runs_dir.
-    reads=("cfd",),
-    code=("rotorflow.cases", "rotorflow.postprocess.leakage", "rotorflow.quasi1d.flows"),
+    # Tip gaps are generic (gap, pressure ratio, wall radius, wall speed); sealing-line
+    # sections are cut from [machine], their walls move at the rotor speed of
+    # [operating] (driven "auto" reads the power split: the sweep and volume ratio).
+    # Runs are reused point by point through [cfd] runs_dir.
+    reads=("cfd", "machine", "sweep", "operating.speed_rpm", "operating.driven",
+           "operating.volume_ratio"),
+    code=("rotorflow.cases", "rotorflow.postprocess.leakage", "rotorflow.quasi1d.flows",
+          "rotorflow.geometry.sealing_gap", "rotorflow.geometry.profile_curves"),
     report="rotorflow.postprocess.leakage:report_section",
     report_rank=60,
     missing=_has_cfd,

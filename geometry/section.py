@@ -37,7 +37,7 @@ import numpy as np
 
 from .pin_gerotor import TWO_PI, PinGerotor
 from .pin_space import PinSpace
-from .split_space import SplitRegions, SplitSpace
+from .split_space import PIN_LEADING, PIN_TRAILING, SplitRegions, SplitSpace
 
 #: Default angle samples per lobe period (2 pi / N1) of the section tables.
 POINTS_PER_PERIOD = 96
@@ -125,16 +125,17 @@ def _fill_split(reg: SplitRegions, birth, o2, rows, area, dx, dy, tq1, tq2, trai
     trail_pin[rows] = any_kept & (first == 0)
     lead_pin[rows] = any_kept & (last == reg.count - 2)
     k = reg.branch.shape[1]
-    trail_id[rows] = np.where(any_kept, reg.branch[n, first], -1)
-    lead_id[rows] = np.where(any_kept, reg.branch[n, np.minimum(last + 1, k - 1)], -1)
+    point = -9  # a chamber born or dying as a point: no contact line to follow
+    trail_id[rows] = np.where(any_kept, reg.branch[n, first], point)
+    lead_id[rows] = np.where(any_kept, reg.branch[n, np.minimum(last + 1, k - 1)], point)
 
 
-def _neighbour_offsets(space, psi, birth, lead_pin, trail_pin, phi_i, phi_j, phi_f):
+def _neighbour_offsets(splitter: SplitSpace, psi, birth, lead_pin, trail_pin, phi_i, phi_j,
+                       phi_f):
     """Age offsets (in periods) of the chambers beyond the leading and trailing contact."""
-    n1 = space.pair.lobes_outer
+    n1 = splitter.pair.lobes_outer
     period = TWO_PI / n1
     s = max(phi_j - phi_i, 0.0)  # length of the split phase
-    splitter = SplitSpace(space) if s > 0.0 else None
 
     def occupant(angle, region_of):
         """+0 where the chamber of age ``angle`` holds that side of its space, -1 where
@@ -211,18 +212,16 @@ def section_chamber(pair: PinGerotor, points_per_period: int = POINTS_PER_PERIOD
 
     lead_pin = np.ones(n, dtype=bool)
     trail_pin = np.ones(n, dtype=bool)
-    lead_id = np.full(n, 1000)  # pin 0 (ids of split_space branches below)
-    trail_id = np.zeros(n, dtype=int)  # pin -1
+    lead_id = np.full(n, PIN_LEADING)
+    trail_id = np.full(n, PIN_TRAILING)
+    splitter = SplitSpace(space)
     split = ~whole & ~dead
     birth = psi < phi_j + 1e-12
     if split.any():
-        _fill_split(SplitSpace(space).regions(psi[split]), birth[split],
+        _fill_split(splitter.regions(psi[split]), birth[split],
                     o2, split, area, dx, dy, tq1, tq2, trail, lead, perim_o, perim_i,
                     lead_pin, trail_pin, lead_id, trail_id)
-        # Pin 0 is the last branch of split_space; give it the id of the whole phase.
-        k = 2 + len(SplitSpace(space)._branches)
-        lead_id[lead_id == k - 1] = 1000
-    lead_offset, trail_offset = _neighbour_offsets(space, psi, birth, lead_pin, trail_pin,
+    lead_offset, trail_offset = _neighbour_offsets(splitter, psi, birth, lead_pin, trail_pin,
                                                    phi_i, phi_j, phi_f)
     # The chamber is born and dies as a point: exact zeros at the ends (there the
     # contact search may already see the neighbouring chamber's whole space).

@@ -29,6 +29,11 @@ from .pin_space import PinSpace
 #: from a start ~1e-7 off: two reach machine precision, the third is a margin).
 NEWTON_STEPS = 3
 
+#: Identity of the two pin contacts in :attr:`SplitRegions.branch` (fillet contacts are
+#: numbered 1.. by branch), the same whatever the number of branches.
+PIN_TRAILING = 0
+PIN_LEADING = -1
+
 
 @dataclass(frozen=True)
 class SplitRegions:
@@ -40,7 +45,7 @@ class SplitRegions:
 
     count: np.ndarray  # (n,) number of contacts
     points: np.ndarray  # (n, k, 2) fixed frame
-    branch: np.ndarray  # (n, k) which contact: 0 pin -1, 1.. fillet branches, k - 1 pin 0
+    branch: np.ndarray  # (n, k) which contact: PIN_TRAILING, 1.. fillet branch, PIN_LEADING
     area: np.ndarray  # (n, k - 1)
     touched: np.ndarray  # (n, k - 1) bool
     perimeter_outer: np.ndarray  # (n, k - 1)
@@ -141,7 +146,7 @@ class SplitSpace:
 
         g2, gfil, pts = pack(g2), pack(gfil), pack(pts)
         branch = pack(np.broadcast_to(np.arange(k)[None, :], (n, k)).copy())
-        branch[~np.take_along_axis(present, order, axis=1)] = k - 1
+        branch[branch == k - 1] = PIN_LEADING
         r = np.arange(k - 1)[None, :]
         valid = r < count[:, None] - 1
         a_pin = np.broadcast_to(r == 0, valid.shape)

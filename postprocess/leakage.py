@@ -312,6 +312,23 @@ def couette_parameter(wall_speed_ratio, pressure_ratio, gamma: float = 1.4):
         pr, gamma)
 
 
+def lubrication_ratio(pressure_ratio, gamma: float = 1.4):
+    """Y = psi^2 / (1 - PR^-2), so that X = 24 (L/h) Y / Re.
+
+    Both psi^2 and 1 - PR^-2 vanish like 2 (1 - 1/PR) at PR -> 1, where Y -> 1; written
+    as a ratio of expm1 terms it is evaluated without the 0/0 (and Y = 1 at PR = 1).
+    """
+    pr = np.asarray(pressure_ratio, dtype=float)
+    c = (gamma - 1.0) / gamma
+    t = -np.log(pr)  # ln(1/PR) <= 0
+    tx = np.maximum(t, math.log((2 / (gamma + 1)) ** (1.0 / c)))  # choked below x_cr
+    # psi^2 = 2/c x^(2/gamma) (1 - x^c) with x = exp(tx)
+    num = (2.0 / c) * np.exp(2.0 * tx / gamma) * -np.expm1(c * tx)
+    den = -np.expm1(2.0 * t)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(den > 0.0, num / den, 1.0)
+
+
 def viscous_parameter(reynolds, pressure_ratio, length_over_gap, gamma: float = 1.4):
     """X = 24 (L/h) psi^2 / (Re (1 - 1/PR^2)): Cd of laminar lubrication flow is 1 / X."""
     pr = np.asarray(pressure_ratio, dtype=float)
@@ -353,6 +370,55 @@ class FlowCoefficientFit:
         # The root of A Cd|Cd| + b Cd = q with the sign of q, free of cancellation.
         cd = 2.0 * q / (b + np.sqrt(b * b + 4.0 * a * np.abs(q)))
         return float(cd) if np.ndim(cd) == 0 else cd
+
+    def reduced_flux(self, psi, pressure_ratio, viscous_number, wall_speed_ratio=None,
+                     reverse_density_ratio=None):
+        """G = Cd psi = m' / (h sqrt(p_up rho_up)): the fit's mass flow in a form that stays
+        finite through PR -> 1, for models that evaluate it at every pressure ratio.
+
+        ``psi``: the nozzle flux of the caller (m_id = h psi sqrt(p_up rho_up));
+        ``viscous_number``: K = 24 L mu / (h^2 sqrt(p_up rho_up)), so that X psi = K Y with
+        Y = lubrication_ratio(PR); ``wall_speed_ratio``: V = U sqrt(rho_up / p_up), U the
+        mean wall speed from upstream to downstream (None: static walls).  The correlation
+        times psi^2 reads
+
+            A G|G| + b K Y G = psi^2 + b w K Y kappa V,
+
+        every term finite at PR = 1.  There, with moving walls, the flow is the drag flow
+        G = 2 b w K V / (b K + sqrt((b K)^2 + 4 A b w K |V|)), which tends to w V (m' = w
+        rho U h) when friction dominates; G is odd in V, so the flow keeps its direction
+        when the upstream side changes at equal pressures.  With psi = nozzle_psi(PR, gamma)
+        this is exactly flow_coefficient(Re, PR, L/h, V) * psi (Re = h psi sqrt(p rho) / mu).
+
+        ``reverse_density_ratio``: rho_down / rho_up.  Where the walls drive the flow
+        against the pressure difference (the right-hand side above < 0), the gas that
+        enters the gap is the downstream side's; the correlation is then evaluated with
+        that density at p_up (K and V change with it, the right-hand side does not, so the
+        flow stays continuous: it is zero where it turns).  At equal pressures the flow
+        is then the drag flow of the side the walls drag from, whichever side counts as
+        upstream.  None: rho_up throughout (the CFD points have one temperature on both
+        sides and cannot tell).
+        """
+        pr = np.asarray(pressure_ratio, dtype=float)
+        psi = np.asarray(psi, dtype=float)
+        a = sum(c * INERTIAL_FEATURES[f](pr) for f, c in zip(self.inertial_features,
+                                                               self.inertial, strict=True))
+        bky = self.viscous * np.asarray(viscous_number, dtype=float) * lubrication_ratio(
+            pr, self.gamma)
+        q = psi * psi
+        if self.wall != 0.0 and wall_speed_ratio is not None:
+            q = q + self.wall * bky * drag_density_ratio(pr) * np.asarray(wall_speed_ratio,
+                                                                           dtype=float)
+        sr = 1.0
+        if reverse_density_ratio is not None:
+            # rho = r rho_up: K / sqrt(r) and V sqrt(r), a flux sqrt(r) times as large
+            sr = np.where(q < 0.0, np.sqrt(reverse_density_ratio), 1.0)
+            bky = bky / sr
+        den = bky + np.sqrt(bky * bky + 4.0 * a * np.abs(q))
+        # den = 0 only without friction and without flow (b = 0, psi = 0): G = 0 there.
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g = np.where(den > 0.0, 2.0 * q / den, 0.0) * sr
+        return float(g) if np.ndim(g) == 0 else g
 
     def model(self) -> Model:
         """The fit as a leakage model for :func:`compare`."""

@@ -20,10 +20,14 @@ d/dtheta = (1/omega) d/dt.
 Flow paths: leakage along the sealing lines to the next (older) and previous (younger)
 chamber, across the end faces to the suction (low-pressure face) and discharge plenum
 (high-pressure face); the youngest chamber's previous neighbour is the suction plenum,
-the oldest's next is the discharge plenum.  Ports: suction open from birth to
-suction_close through area_lp, discharge open from discharge_open to death through
-area_hp; "nozzle" ports are flows like the others, "ideal" ports hold the chamber at the
-plenum pressure (the port flow is solved from dp/dt = 0 with a weak drift correction).
+the oldest's next is the discharge plenum.  With moving walls (Leakage.wall_motion) the
+interlobe lines also carry the gas the rotor surface drags from the older into the
+younger chamber: a Couette term of its own, or, with the "cfd-calibrated" model and a fit
+that has a wall term, the fit's drag term, the wall speed passed to the correlation
+(ChamberModel.drag_in_fit).  Ports: suction open from birth to suction_close through
+area_lp, discharge open from discharge_open to death through area_hp; "nozzle" ports are
+flows like the others, "ideal" ports hold the chamber at the plenum pressure (the port
+flow is solved from dp/dt = 0 with a weak drift correction).
 
 Accumulators ride along the state (quadratures of the same flows): mass and enthalpy
 from suction and to discharge, work done on the gas, heat, gross leakage per path.
@@ -177,9 +181,8 @@ class ChamberModel:
             flat = lin.ravel()
             area = seg.area @ flat
             cou = None
-            if self.leak.wall_motion and seg.n_leak:
-                cou = (0.5 * self.geo.omega_outer * self.geo.radius * self.leak.gap_m) * (
-                    seg.link_len @ flat)
+            if self.leak.wall_motion and seg.n_leak and not self.drag_in_fit:
+                cou = (self.wall_speed * self.leak.gap_m) * (seg.link_len @ flat)
             wall = None
             if self.op.heat_transfer_W_m2K > 0.0:
                 wall = self.op.heat_transfer_W_m2K * WALL_AREA_FACTOR * V ** (2.0 / 3.0)
@@ -201,24 +204,52 @@ class ChamberModel:
             self.work[key] = w
         return w
 
-    def _flow_coefficient(self, p1, r1, x, psi):
-        """Cd of the CFD fit for each leakage path: Re from the ideal nozzle flow per unit
-        sealing-line length (the fit's definition), PR = p_up / p_down, L/h of the land."""
-        leak = self.leak
-        flowing = (x < 1.0 - 1e-12) & (psi > 0.0)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            re = leak.gap_m * psi * np.sqrt(p1 * r1) / leak.viscosity_Pa_s
-            cd = leak.correlation.flow_coefficient(
-                np.where(flowing, re, 1.0), np.where(flowing, 1.0 / x, 2.0),
-                leak.land_m / leak.gap_m)
-        # No pressure difference, no flow: Cd is then immaterial (and 0/0 in the fit).
-        return np.where(flowing, cd, 1.0)
+    @property
+    def wall_speed(self) -> float:
+        """U = half the outer rotor's tip speed: the mean wall speed along an interlobe
+        line, dragging gas from the older chamber into the younger one."""
+        return 0.5 * self.geo.omega_outer * self.geo.radius
 
-    def rhs(self, theta: float, y: np.ndarray, seg: Segment) -> np.ndarray:
-        """dy/dtheta for a batch of states y (B, n_state) inside segment ``seg``."""
-        n, na, fl = self.n, seg.n_act, self.fluid
+    @property
+    def drag_in_fit(self) -> bool:
+        """The wall drag of the interlobe lines is the "cfd-calibrated" fit's own (its wall
+        term w, with the wall speed passed to it) rather than the separate Couette term.
+        A fit without a wall term (w = 0: fitted to static walls, or saved before the term
+        existed) says nothing about moving walls; it keeps the Couette term."""
+        leak = self.leak
+        return bool(leak.wall_motion and leak.model == "cfd-calibrated"
+                    and leak.correlation is not None and leak.correlation.wall != 0.0)
+
+    def _calibrated_flux(self, S, x, psi, v, rr):
+        """Mass flux over sqrt(p_up rho_up) of each leakage path from the CFD fit: Cd psi
+        in the fit's form that is finite through x -> 1 (FlowCoefficientFit.reduced_flux):
+        PR = p_up / p_down, K = 24 L mu / (h^2 S) with L the land and S = sqrt(p_up
+        rho_up), ``v`` the wall speed ratios along the flow (None: static walls), ``rr``
+        the downstream over the upstream density (for flows the walls drive backwards;
+        None: static walls).  With static walls this is Cd(Re, PR, L/h) psi with Re from
+        the ideal nozzle flow per unit sealing-line length (the fit's definition), and no
+        flow without a pressure difference."""
+        leak = self.leak
+        k = (24.0 * leak.land_m * leak.viscosity_Pa_s / leak.gap_m**2) / S
+        return leak.correlation.reduced_flux(psi, 1.0 / x, k, v, rr)
+
+    def path_flows(self, theta: float, y: np.ndarray, seg: Segment, enthalpy: bool = False):
+        """Mass flow (kg/s) along every flow path of ``seg`` (from node ia to node ib) for
+        a state y (n_state,) or a batch (B, n_state); the leakage paths come first.  With
+        ``enthalpy``: (mass flows, enthalpy flows in W)."""
+        y = np.asarray(y, dtype=float)
+        F, E = self._flows(theta, np.atleast_2d(y), seg)[:2]
+        if y.ndim == 1:
+            F, E = F[0], E[0]
+        return (F, E) if enthalpy else F
+
+    def _flows(self, theta: float, y: np.ndarray, seg: Segment):
+        """Mass and enthalpy flows of every path, with the slot states they came from."""
+        na, fl = seg.n_act, self.fluid
+        n = self.n
         B = y.shape[0]
-        V, iV, dV, Vt, area, cou, wall = self._geometry(theta, seg)
+        g = self._geometry(theta, seg)
+        iV, area, cou = g[1], g[4], g[5]
         m = y[:, :na]
         U = y[:, n:n + na]
         rho = m * iV
@@ -241,6 +272,7 @@ class ChamberModel:
         p1 = np.maximum(pa, pb)
         x = np.minimum(pa, pb) / p1
         r1 = np.where(fwd, Wa[1], Wb[1])
+        drag = self.drag_in_fit and nl
         k1 = kap if scalar_k else np.where(fwd, Wa[3], Wb[3])
         if self.leak.model == "fanno" and nl:
             f = np.empty_like(x)
@@ -249,16 +281,39 @@ class ChamberModel:
                 f[:, nl:] = flows.nozzle_f(x[:, nl:], k1 if scalar_k else k1[:, nl:])
         else:
             f = flows.nozzle_f(x, k1)
+        S = np.sqrt(p1 * r1)
         if self.leak.model == "cfd-calibrated" and nl:
-            f[:, :nl] *= self._flow_coefficient(p1[:, :nl], r1[:, :nl], x[:, :nl], f[:, :nl])
-        F = np.sqrt(p1 * r1) * f * area
+            v = rr = None
+            if drag:
+                # Interlobe lines (the chain, flows 0..na): the drag runs from the older
+                # chamber (node j+1, side b) into the younger (node j, side a), so the wall
+                # speed along the flow is positive when b is upstream; 0 on the end faces
+                # and the farther lines.  rr: downstream over upstream density, for the
+                # gas that enters the gap where the walls win against the pressure.
+                c = slice(0, na + 1)
+                v = np.zeros_like(x[:, :nl])
+                v[:, c] = np.where(fwd[:, c], -self.wall_speed, self.wall_speed) * np.sqrt(
+                    r1[:, c] / p1[:, c])
+                rr = np.ones_like(v)
+                ra, rb = Wa[1][:, c], Wb[1][:, c]
+                rr[:, c] = np.where(fwd[:, c], rb / ra, ra / rb)
+            f[:, :nl] = self._calibrated_flux(S[:, :nl], x[:, :nl], f[:, :nl], v, rr)
+        F = S * f * area
         F = np.where(fwd, F, -F)
         if cou is not None:
             # Couette flow: half the tip speed times the gap along each interlobe line,
             # carried from the older (node j+1) into the younger chamber (node j).
             F[:, :na + 1] -= cou * R[:, 1:na + 2]
-            fwd = F > 0.0
+        if cou is not None or drag:
+            fwd = F > 0.0  # the walls may carry the flow against the pressure difference
         E = F * np.where(fwd, Wa[2], Wb[2])
+        return F, E, g, m, rho, u, p, T, h
+
+    def rhs(self, theta: float, y: np.ndarray, seg: Segment) -> np.ndarray:
+        """dy/dtheta for a batch of states y (B, n_state) inside segment ``seg``."""
+        n, na, fl = self.n, seg.n_act, self.fluid
+        F, E, g, m, rho, u, p, T, h = self._flows(theta, y, seg)
+        V, dV, Vt, wall = g[0], g[2], g[3], g[6]
         dy = F @ seg.mm + E @ seg.me + np.abs(F) @ seg.mg
         pdV = p * dV
         dy[:, n:n + na] -= pdV
@@ -436,6 +491,8 @@ def _cols(k, nl, leak):
 
 
 def _u_from_rho_p(fl, rho, p):
+    if hasattr(fl, "u_from_rho_p"):
+        return fl.u_from_rho_p(rho, p)
     if hasattr(fl, "gamma"):
         return p / ((fl.gamma - 1.0) * rho)
     from scipy.optimize import brentq

@@ -9,9 +9,17 @@ reads one TOML table; an unknown key or an impossible value raises
 Fluids (``[operating] fluid``):
 
 ``"air"`` (default)
-    ideal gas with constant heat capacity: molar mass 28.97 g/mol and
-    cp = 1006.43 J/(kg K) (seed 001, Table 3), overridable with ``molar_mass_g_mol`` and
-    ``cp_J_kgK``.  Closed-form properties; the fast path.
+    dry air as an ideal gas, p = rho R T.  ``heat_capacity``:
+
+    ``"temperature"`` (default unless a key below is given): cp(T) of dry air (the ideal-gas
+        part of CoolProp's air, Lemmon et al. 2000, to 7e-5 over 100-2500 K).  At the
+        CRC.60 point it agrees with CoolProp's real-gas air within 0.02 % in flow and
+        0.2 % in power; a constant cp of 1006.43 J/(kg K) is 0.4 % and 0.8 % off, because
+        cp grows 6 % between suction and 650 K discharge.
+    ``"constant"``: a calorically perfect gas with molar mass ``molar_mass_g_mol`` (28.97)
+        and ``cp_J_kgK`` (1006.43, seed 001 Table 3); chosen by giving either key.  The
+        closed forms of the textbook (pV^kappa, seed 000 Eq. 17) hold exactly; the CFD
+        cases use this gas.
 ``"CoolProp::<name>"``
     a real fluid from CoolProp's Helmholtz equations of state (``"CoolProp::Air"``,
     ``"CoolProp::R134a"``, ...), evaluated through a table built once per run over the
@@ -32,6 +40,7 @@ R_UNIVERSAL = 8.314462618  # J/(mol K)
 
 LEAKAGE_MODELS = ("none", "nozzle", "fanno", "cfd-calibrated")
 PORT_MODELS = ("ideal", "nozzle")
+HEAT_CAPACITIES = ("temperature", "constant")
 INTEGRATORS = ("auto", "dopri5", "bs3", "ros23", "radau", "bdf")
 
 
@@ -117,8 +126,9 @@ class Operating:
     discharge_open_rad: float | None = None
     T_wall_K: float | None = None  # None: equal to T_suction_K
     heat_transfer_W_m2K: float = 0.0  # 0: adiabatic chambers (seed 001 neglects heat transfer)
-    molar_mass_kg_mol: float = AIR_MOLAR_MASS_G_MOL * 1e-3  # ideal-gas "air" only
-    cp_J_kgK: float = AIR_CP_J_KGK  # ideal-gas "air" only
+    heat_capacity: str = "temperature"  # ideal-gas "air" only: cp(T), or "constant"
+    molar_mass_kg_mol: float = AIR_MOLAR_MASS_G_MOL * 1e-3  # heat_capacity "constant" only
+    cp_J_kgK: float = AIR_CP_J_KGK  # heat_capacity "constant" only
     oil_mass_ratio: float = 0.0  # injected oil mass per trapped gas mass; 0: no oil
     T_oil_K: float | None = None  # None: equal to T_suction_K
     oil_cp_J_kgK: float = 1900.0  # typical mineral compressor oil
@@ -129,7 +139,8 @@ class Operating:
     KEYS = (
         "p_suction_bar", "p_discharge_bar", "T_suction_K", "speed_rpm", "fluid",
         "volume_ratio", "suction_close_deg", "discharge_open_deg", "T_wall_K",
-        "heat_transfer_W_m2K", "molar_mass_g_mol", "cp_J_kgK", "oil_mass_ratio", "T_oil_K",
+        "heat_transfer_W_m2K", "heat_capacity", "molar_mass_g_mol", "cp_J_kgK",
+        "oil_mass_ratio", "T_oil_K",
         "oil_cp_J_kgK", "oil_time_constant_ms",
         "driven",  # a geometry key that the case file keeps in [operating]; not used here
     )
@@ -137,6 +148,11 @@ class Operating:
     @property
     def R_J_kgK(self) -> float:
         return R_UNIVERSAL / self.molar_mass_kg_mol
+
+    @property
+    def perfect_gas(self) -> bool:
+        """Air with a constant cp (closed-form properties)."""
+        return self.fluid == "air" and self.heat_capacity == "constant"
 
     @property
     def pressure_ratio(self) -> float:
@@ -183,6 +199,16 @@ class Operating:
             )
         Tw = d.get("T_wall_K")
         Toil = d.get("T_oil_K")
+        perfect = [k for k in ("cp_J_kgK", "molar_mass_g_mol") if k in d]
+        own = perfect + (["heat_capacity"] if "heat_capacity" in d else [])
+        if own and fluid != "air":
+            raise CaseError(f"key '{own[0]}' in [{s}] of {where} is for fluid \"air\"; "
+                            f"{fluid} brings its own properties")
+        heat_capacity = _choice(d, "heat_capacity", s, where, HEAT_CAPACITIES,
+                                "constant" if perfect else "temperature")
+        if perfect and heat_capacity == "temperature":
+            raise CaseError(f"key '{perfect[0]}' in [{s}] of {where} sets a constant-cp gas; "
+                            "heat_capacity = \"temperature\" uses dry air's cp(T)")
         return cls(
             p_suction_Pa=ps * BAR,
             p_discharge_Pa=pd * BAR,
@@ -194,6 +220,7 @@ class Operating:
             discharge_open_rad=do,
             T_wall_K=None if Tw is None else _number(d, "T_wall_K", s, where, positive=True),
             heat_transfer_W_m2K=_number(d, "heat_transfer_W_m2K", s, where, 0.0, nonnegative=True),
+            heat_capacity=heat_capacity,
             molar_mass_kg_mol=1e-3 * _number(d, "molar_mass_g_mol", s, where,
                                              AIR_MOLAR_MASS_G_MOL, positive=True),
             cp_J_kgK=_number(d, "cp_J_kgK", s, where, AIR_CP_J_KGK, positive=True),
@@ -206,7 +233,7 @@ class Operating:
 
     def check_ideal_gas(self, where: str = "the case") -> None:
         """cp must exceed R for an ideal gas (gamma > 1)."""
-        if self.fluid == "air" and self.cp_J_kgK <= self.R_J_kgK:
+        if self.perfect_gas and self.cp_J_kgK <= self.R_J_kgK:
             raise CaseError(
                 f"cp_J_kgK = {self.cp_J_kgK} must exceed the gas constant "
                 f"{self.R_J_kgK:.1f} J/(kg K) in [operating] of {where}"
@@ -222,10 +249,15 @@ class Leakage:
     resistance ``zeta`` = f L_g / D_g + sum(xi), mass flow times ``coefficient``).
     ``wall_motion`` adds the Couette flow dragged through the interlobe gaps by the rotor
     surface (half the tip speed times the gap), from the older into the younger chamber.
-    "cfd-calibrated": the isentropic nozzle times the flow coefficient Cd(Re, PR, L/h)
+    "cfd-calibrated": the isentropic nozzle times the flow coefficient Cd(Re, PR, L/h, V)
     fitted to the CFD leakage matrix (``correlation``: the fit's JSON file, written by the
     cfd.leakage stage), with the land length ``land_mm`` of the sealing lines and the gas
-    viscosity ``viscosity_Pa_s`` for the gap Reynolds number.
+    viscosity ``viscosity_Pa_s`` for the gap Reynolds number.  With ``wall_motion`` and a
+    fit that has a wall term (w != 0) the drag on the interlobe lines is the fit's own: the
+    wall speed ratio V = U sqrt(rho / p) (U half the tip speed, positive when the drag runs
+    from the upstream side) goes into the correlation and no separate Couette term is
+    added; at equal pressures the flow is the fit's drag flow, about w rho U h.  A fit
+    without a wall term (w = 0) keeps the separate Couette term.
     """
 
     gap_m: float = 0.0

@@ -46,6 +46,11 @@ def test_leakage_ports_numerics_read_si_values():
         (Operating, "operating", _op(fluid="unobtainium"), ["unknown fluid", "unobtainium"]),
         (Operating, "operating", _op(fluid="CoolProp::Unobtainium"), ["unknown fluid"]),
         (Operating, "operating", _op(T_suction_K="hot"), ["T_suction_K", "number"]),
+        (Operating, "operating", _op(heat_capacity="variable"), ["heat_capacity", "constant"]),
+        (Operating, "operating", _op(heat_capacity="temperature", cp_J_kgK=1005.0),
+         ["cp_J_kgK", "constant-cp"]),
+        (Operating, "operating", _op(fluid="CoolProp::Air", cp_J_kgK=1005.0),
+         ["cp_J_kgK", "CoolProp::Air"]),
         (Operating, "operating", _op(speed_rpm=0), ["speed_rpm", "positive"]),
         (Operating, "operating", _op(volume_ratio=0.5), ["volume_ratio", "at least 1"]),
         (Operating, "operating", {k: v for k, v in GOOD.items() if k != "T_suction_K"},
@@ -84,6 +89,20 @@ def test_missing_table_and_impossible_ports():
     with pytest.raises(CaseError, match="volume_ratio or discharge_open_deg"):
         simulate(table, Operating.from_section(
             {k: v for k, v in GOOD.items() if k != "volume_ratio"}, "case.toml"))
+
+
+def test_air_is_dry_air_with_cp_of_t_unless_a_constant_cp_is_given():
+    from rotorflow.quasi1d.fluids import IdealGas, ThermallyPerfectGas, make_fluid
+
+    op = Operating.from_section(_op(), "case.toml")
+    assert op.heat_capacity == "temperature"
+    assert isinstance(make_fluid(op, 4.6), ThermallyPerfectGas)
+    for extra in ({"cp_J_kgK": 1005.0}, {"molar_mass_g_mol": 28.0},
+                  {"heat_capacity": "constant"}):
+        op = Operating.from_section(_op(**extra), "case.toml")
+        assert op.heat_capacity == "constant"
+        gas = make_fluid(op, 4.6)
+        assert isinstance(gas, IdealGas) and gas.cp == op.cp_J_kgK
 
 
 def test_ideal_gas_needs_cp_above_R():

@@ -14,7 +14,7 @@ from .conftest import CASES
 
 def test_cfd_case_loads_and_its_stage_is_registered():
     case = load_case(CASES / "cfd_leakage.toml")
-    assert case.raw["cfd"]["gap_um"] == [10, 50]
+    assert case.raw["cfd"]["gap_um"] == [5, 10, 50, 200]
     assert case.raw["cfd"]["rotor_angle_deg"] == [240, 300]
     stage = REGISTRY["cfd.leakage"]
     # Sealing-line sections are cut from the machine and move at the operating speed.
@@ -23,9 +23,9 @@ def test_cfd_case_loads_and_its_stage_is_registered():
 
 
 @pytest.mark.parametrize("old, new, word", [
-    ("gap_um = [10, 50]", "gap_um = [10, 50]\nmesh = 3", "mesh"),
-    ("gap_um = [10, 50]", "gap_um = [-10]", "gaps"),
-    ("pressure_ratio = [1.2, 4.0]", "pressure_ratio = 2.0", "list"),
+    ("gap_um = [5, 10, 50, 200]", "gap_um = [5, 10]\nmesh = 3", "mesh"),
+    ("gap_um = [5, 10, 50, 200]", "gap_um = [-10]", "gaps"),
+    ("pressure_ratio = [1.1, 2.0, 4.0]", "pressure_ratio = 2.0", "list"),
     ("rotor_angle_deg = [240, 300]", "rotor_angle_deg = [240, 330]", "330"),
     ("speed_rpm = 6000", "", "speed_rpm"),
 ])

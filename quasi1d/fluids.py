@@ -118,8 +118,8 @@ class ThermallyPerfectGas:
         s0/R  = a ln T + sum n_k (x_k / (e^x_k - 1) - ln(1 - e^-x_k))    (s = s0 - R ln p)
 
     The chamber equations need T from u without iteration: T and kappa = cp/cv are
-    tabulated once on a uniform grid of u (linear interpolation: T within 1e-6 relative;
-    dp/du is the interpolant's own slope, so that dp and props agree exactly).
+    tabulated once on a uniform grid of u (linear interpolation: T within 1e-6 relative),
+    with 1/cv for dp/du.
     Event and performance evaluations solve u(T), h(T), s0(T) by Newton's method.
     """
 
@@ -180,10 +180,13 @@ class ThermallyPerfectGas:
         ug = np.linspace(u_lo, u_hi, THERMALLY_PERFECT_NODES)
         Tg = self.T_u(ug)
         cv = self.cv(Tg)
-        return u_lo, (u_hi - u_lo) / (ug.size - 1), ug.size, np.stack([Tg, (cv + self.R) / cv])
+        return (u_lo, (u_hi - u_lo) / (ug.size - 1), ug.size,
+                np.stack([Tg, (cv + self.R) / cv, 1.0 / cv]))
 
     def _interp(self, u):
-        """T and kappa at u, and dT/du of the interpolant (so that dp agrees with props)."""
+        """T, kappa and 1/cv at u.  dp/du uses the interpolated 1/cv, continuous in u: the
+        interpolant's own slope (piecewise constant) agrees with p to round-off but its
+        jumps stall the cycle convergence of 8 % of the stress points."""
         u0, du, nu, rows = self._table
         f = (np.asarray(u, dtype=float) - u0) / du
         j = np.clip(f.astype(np.intp), 0, nu - 2)
@@ -191,15 +194,15 @@ class ThermallyPerfectGas:
         c0 = rows[:, j]
         dc = rows[:, j + 1] - c0
         v = c0 + t * dc
-        return v[0], v[1], dc[0] * (1.0 / du)
+        return v[0], v[1], v[2]
 
     def props(self, rho, u):
         T, kappa, _ = self._interp(u)
         return self.R * rho * T, T, kappa
 
     def dp(self, rho, u):
-        T, _, dTdu = self._interp(u)
-        return self.R * T, self.R * rho * dTdu
+        T, _, icv = self._interp(u)
+        return self.R * T, self.R * rho * icv
 
     def in_range(self, rho, u) -> bool:
         u0, du, nu, _ = self._table

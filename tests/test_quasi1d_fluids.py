@@ -62,10 +62,10 @@ def test_pressure_derivatives_match_finite_differences():
     pr, pu = AIR.dp(rho, u)
     fr = (AIR.props(rho + dr, u)[0] - AIR.props(rho - dr, u)[0]) / (2 * dr)
     fu = (AIR.props(rho, u + du)[0] - AIR.props(rho, u - du)[0]) / (2 * du)
-    # exact derivatives of the table (what the ideal-port constraint needs) ...
-    assert np.allclose(pr, fr, rtol=1e-8) and np.allclose(pu, fu, rtol=1e-6)
-    # ... and of the gas: dp/du = rho R / cv to the table's resolution
-    assert np.allclose(pu, rho * AIR.R / AIR.cv(T), rtol=1e-3)
+    # dp/drho exact; dp/du = rho R / cv, continuous in u, so it differs from the slope
+    # of the piecewise-linear T(u) by up to dT cv'/cv ~ 5e-4 (1.8 K cells)
+    assert np.allclose(pr, fr, rtol=1e-8) and np.allclose(pu, fu, rtol=1e-3)
+    assert np.allclose(pu, rho * AIR.R / AIR.cv(T), rtol=1e-6)
 
 
 @pytest.mark.parametrize("gas", [AIR, IdealGas(R=287.0, cp=1004.5)], ids=["cp(T)", "perfect"])

@@ -361,8 +361,7 @@ class FlowCoefficientFit:
         """Cd at gap Reynolds number, pressure ratio, L/h and wall speed ratio
         V = U sqrt(rho_up / p_up) (U along the flow; 0: static walls)."""
         pr = np.asarray(pressure_ratio, dtype=float)
-        a = sum(c * INERTIAL_FEATURES[f](pr) for f, c in zip(self.inertial_features,
-                                                               self.inertial, strict=True))
+        a = self._inertial(pr)
         b = self.viscous * viscous_parameter(reynolds, pr, length_over_gap, self.gamma)
         q = 1.0
         if self.wall != 0.0 and np.any(np.asarray(wall_speed_ratio) != 0.0):
@@ -370,6 +369,11 @@ class FlowCoefficientFit:
         # The root of A Cd|Cd| + b Cd = q with the sign of q, free of cancellation.
         cd = 2.0 * q / (b + np.sqrt(b * b + 4.0 * a * np.abs(q)))
         return float(cd) if np.ndim(cd) == 0 else cd
+
+    def _inertial(self, pr):
+        """A(PR): the inertial coefficient of the fit."""
+        return sum(c * INERTIAL_FEATURES[f](pr) for f, c in zip(self.inertial_features,
+                                                                self.inertial, strict=True))
 
     def reduced_flux(self, psi, pressure_ratio, viscous_number, wall_speed_ratio=None,
                      reverse_density_ratio=None):
@@ -401,8 +405,7 @@ class FlowCoefficientFit:
         """
         pr = np.asarray(pressure_ratio, dtype=float)
         psi = np.asarray(psi, dtype=float)
-        a = sum(c * INERTIAL_FEATURES[f](pr) for f, c in zip(self.inertial_features,
-                                                               self.inertial, strict=True))
+        a = self._inertial(pr)
         bky = self.viscous * np.asarray(viscous_number, dtype=float) * lubrication_ratio(
             pr, self.gamma)
         q = psi * psi

@@ -11,6 +11,7 @@ arrays of (rho, u) and without inner iteration:
 and, at a few points per run (plenum states, port events, performance figures):
 
     state_pT(p, T) -> rho, u, h
+    u_from_rho_p(rho, p) -> u                   (starting states of the chambers)
     isentropic(rho, u, p2) -> rho2, u2          (blow-down of the gas left in a chamber)
     fill(m, U, V, h_in, p2) -> m2, U2           (back-flow into a chamber at constant V)
     T_ph(p, h), work_isentropic(p1, T1, p2), work_isothermal(p1, T1, p2)
@@ -70,6 +71,9 @@ class IdealGas:
 
     def state_pT(self, p: float, T: float):
         return p / (self.R * T), self.cv * T, self.cp * T
+
+    def u_from_rho_p(self, rho, p):
+        return p / ((self.gamma - 1.0) * rho)
 
     def T_ph(self, p, h):
         return h / self.cp
@@ -333,6 +337,15 @@ class TabulatedFluid:
         fx = (np.log(rho) - self.x0) / self.dx
         fu = (u - self.u0) / self.du
         return bool(np.all((fx >= 0) & (fx <= self.nx - 1) & (fu >= 0) & (fu <= self.nu - 1)))
+
+    def u_from_rho_p(self, rho, p):
+        """u at (rho, p) on the table (the inverse of props in u, for starting states)."""
+        from scipy.optimize import brentq
+
+        def dp(uu):
+            return float(self.props(np.array([rho]), np.array([uu]))[0][0]) - p
+
+        return brentq(dp, self.u0, self.u0 + self.du * (self.nu - 1))
 
     # -- direct CoolProp evaluations (a few per run) -------------------------------------
     @functools.cached_property

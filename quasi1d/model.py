@@ -466,7 +466,7 @@ class ChamberModel:
             else:  # any working port keeps the chamber near the discharge pressure
                 p = self.dis.p
                 rho = self.suc.rho * (p / self.suc.p) ** (1.0 / kap)
-            u = _u_from_rho_p(fl, rho, p)
+            u = fl.u_from_rho_p(rho, p)
             y[k] = rho * V
             y[n + k] = rho * V * u
             if self.oil and age >= geo.suction_close:
@@ -488,17 +488,6 @@ def _cols(k, nl, leak):
     if not np.ndim(k):
         return k
     return k[:, :nl] if leak else k[:, nl:]
-
-
-def _u_from_rho_p(fl, rho, p):
-    if hasattr(fl, "u_from_rho_p"):
-        return fl.u_from_rho_p(rho, p)
-    if hasattr(fl, "gamma"):
-        return p / ((fl.gamma - 1.0) * rho)
-    from scipy.optimize import brentq
-
-    lo, hi = fl.u0, fl.u0 + fl.du * (fl.nu - 1)
-    return brentq(lambda uu: float(fl.props(np.array([rho]), np.array([uu]))[0][0]) - p, lo, hi)
 
 
 # ---------------------------------------------------------------------------------------

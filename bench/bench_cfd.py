@@ -22,7 +22,12 @@ import time
 from pathlib import Path
 
 from rotorflow.cases import foam, gap_case, gap_mesh
-from rotorflow.cases.gap_study import SectionPoint, matrix_from_section, rotor_machine
+from rotorflow.cases.gap_study import (
+    OUTLET_GAP_RATIO,
+    SectionPoint,
+    matrix_from_section,
+    rotor_machine,
+)
 from rotorflow.postprocess.richardson import richardson
 
 log = logging.getLogger(__name__)
@@ -54,9 +59,10 @@ def section_point(path: Path = SECTION_CASE_FILE) -> SectionPoint:
 
 
 def cases() -> dict[str, gap_case.GapCase]:
-    """Representative gaps: the analytic channel, a laminar and a turbulent rotor tip, and
-    a sealing-line section of the example machine with moving walls."""
-    tip = gap_mesh.rotor_tip_gap(50e-6, 0.02)
+    """Representative gaps: the analytic channel, a laminar and a turbulent rotor tip (cut
+    as the leakage matrix cuts them), and a sealing-line section of the example machine
+    with moving walls."""
+    tip = gap_mesh.rotor_tip_gap(50e-6, 0.02, outlet_gap_ratio=OUTLET_GAP_RATIO)
     tip_spec = gap_mesh.GapMeshSpec(cells_across=16, cells_along=40, along_grading=20)
     section = section_point()
     return {

@@ -180,12 +180,13 @@ TIP_MESH = GapMeshSpec(cells_across=20, cells_along=40, along_grading=20.0)
 SECTION_MESH = TIP_MESH
 
 #: Where the matrix's gaps end downstream: where the walls have opened to this multiple of
-#: the minimum gap, as the jet leaves them.  Farther on, the walls form a 2D diffuser of
-#: growing angle (16 deg included at 3 h for a 20 mm tip) in which a jet of Re_h > ~1000
-#: stalls on one wall or the other (Kline's transitory and bistable stall): a steady RANS
-#: solution then picks a branch by mesh.  Cut at 3 h, the 200 um gap at PR 1.1 attached
+#: the minimum gap, as the jet leaves them.  Farther on, the walls form a 2D diffuser whose
+#: angle grows with the gap (16 deg included at 3 h for 200 um on 20 mm radii), where a
+#: turbulent jet stalls on one wall or the other (the transitory and bistable stall of
+#: Kline's diffuser map): a steady RANS solution then picks a branch by mesh, and the
+#: three-mesh study has no observed order.  Cut at 3 h, the 200 um gap at PR 1.1 attached
 #: up, down, down and central on meshes refined 0.5/1/2/4 (mass flow 0.02905 / 0.02950 /
-#: 0.02872 / 0.02900 kg/s/m, no observed order); at 2 h the same (0.02837 / 0.02840 /
+#: 0.02872 / 0.02900 kg/s/m); at 2 h it still oscillates (0.02837 / 0.02840 /
 #: 0.02774 / 0.02742); at 1.5 h it converges (0.02725 / 0.02719 / 0.02717 / 0.02719).
 #: Pressure recovery past the cut belongs to the downstream chamber, as in the quasi-1D
 #: nozzle, which discharges at the chamber pressure.

@@ -9,8 +9,8 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
-CASE ?= cases/default.toml
-SWEEP ?= cases/lambda_wrap_sweep.toml
+CASE ?= examples/default.toml
+SWEEP ?= examples/lambda_wrap_sweep.toml
 PYTEST_ARGS ?=
 
 -include mk/*.mk
@@ -29,12 +29,12 @@ $(STAMP): pyproject.toml
 venv: $(STAMP) ## create .venv and install rotorflow with its Python dependencies
 
 demo: $(STAMP) ## set up, then run the built-in default case through every stage (cached)
-	$(VENV)/bin/rotorflow run cases/default.toml
+	$(VENV)/bin/rotorflow run examples/default.toml
 
 case: $(STAMP) ## run what a case asks for, skipping what is cached: make case CASE=path/to/case.toml
 	$(VENV)/bin/rotorflow run $(CASE)
 
-sweep: $(STAMP) ## run a sweep on a local Dask cluster: make sweep SWEEP=cases/lambda_wrap_sweep.toml
+sweep: $(STAMP) ## run a sweep on a local Dask cluster: make sweep SWEEP=examples/lambda_wrap_sweep.toml
 	$(VENV)/bin/rotorflow sweep $(SWEEP)
 
 report: $(STAMP) ## HTML report of a case (build/<case>/report/index.html): make report CASE=...

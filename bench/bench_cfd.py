@@ -8,7 +8,7 @@ the benchmark records nothing and says why.
 
 The cases: the analytic parallel channel, rotor-tip gaps (laminar and turbulent), and a
 gap at a sealing line of real rotors (a section point of the leakage matrix in
-cases/cfd_leakage.toml, on the matrix's default section mesh, walls at the rotor surface
+examples/cfd_leakage.toml, on the matrix's default section mesh, walls at the rotor surface
 speeds).
 """
 
@@ -40,7 +40,7 @@ TARGET_ERROR = 0.02
 #: 300 deg (next to the inner rotor's sharp edge, the least parabolic throat of the matrix),
 #: 10 um, pressure ratio 1.2, walls at the rotor speeds: of the matrix's section points the
 #: one where the walls drag most relative to the leak (laminar, Re ~ 40).
-SECTION_CASE_FILE = Path(__file__).resolve().parents[1] / "cases" / "cfd_leakage.toml"
+SECTION_CASE_FILE = Path(__file__).resolve().parents[1] / "examples" / "cfd_leakage.toml"
 SECTION_POINT = {"rotor_angle_deg": 300.0, "gap_um": 10.0, "pressure_ratio": 1.2,
                  "moving_walls": True}
 

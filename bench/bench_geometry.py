@@ -15,8 +15,8 @@ import time
 from pathlib import Path
 
 from rotorflow.geometry.forces import power_split
-from rotorflow.geometry.machine import InternalGearMachine
-from rotorflow.geometry.pin_gerotor import PinGerotor
+from rotorflow.geometry.internal_gear.pair import PinGerotor
+from rotorflow.geometry.machine import SweptMachine
 from rotorflow.workflow.case import load_case
 
 REPO = Path(__file__).resolve().parents[1]
@@ -32,7 +32,7 @@ def _full_case(case, ppp, refinement):
     t0 = time.perf_counter()
     # A fresh pair: nothing cached from an earlier resolution.
     pair = PinGerotor(case.pair.lobes_outer, case.pair.lam, case.pair.sigma, case.pair.diameter)
-    m = InternalGearMachine(pair, case.sweep(None), ppp, refinement)
+    m = SweptMachine(pair, case.sweep(None), ppp, refinement)
     _ = m.curves.volume
     split = power_split(m, case.volume_ratio, case.driven)
     out = (m.section.area_max, m.volume_max, split.pi_max)
@@ -41,7 +41,7 @@ def _full_case(case, ppp, refinement):
 
 def run(results_dir: Path) -> list[dict]:
     results_dir.mkdir(parents=True, exist_ok=True)
-    case = load_case(REPO / "cases" / "default.toml")
+    case = load_case(REPO / "examples" / "default.toml")
     _, ref = _full_case(case, *REFERENCE)
     rows = []
     for ppp, refinement in RESOLUTIONS:

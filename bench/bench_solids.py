@@ -17,8 +17,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from rotorflow.geometry.export import export
-from rotorflow.geometry.export_settings import Export
+from rotorflow.geometry.export.driver import export
+from rotorflow.geometry.export.settings import Export
 from rotorflow.workflow.case import load_case
 
 REPO = Path(__file__).resolve().parents[1]
@@ -51,7 +51,7 @@ def _one(case, fmt: str, tol_um: float) -> dict:
 
 def run(results_dir: Path) -> list[dict]:
     results_dir.mkdir(parents=True, exist_ok=True)
-    case = load_case(REPO / "cases" / "default.toml")
+    case = load_case(REPO / "examples" / "default.toml")
     _one(case, "stl", 40.0)  # warm the imports and caches out of the timings
     rows = []
     for tol in TOLERANCES_UM:

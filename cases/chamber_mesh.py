@@ -41,10 +41,10 @@ from pathlib import Path
 import numpy as np
 
 from rotorflow.errors import CaseError
+from rotorflow.gmsh_session import gmsh_session
 
 from . import foam
 from .gap_mesh import GapMeshSpec, GapWalls, gap_blocks
-from .gmsh_session import gmsh_session
 
 WALL_PATCHES = ("piston", "sideWalls", "bottomWall", "gapWalls")
 

@@ -29,9 +29,9 @@ from scipy.interpolate import make_interp_spline
 from scipy.optimize import brentq, minimize_scalar
 
 from rotorflow.errors import CaseError
+from rotorflow.gmsh_session import gmsh_session
 
 from . import foam
-from .gmsh_session import gmsh_session
 
 PATCH_TYPES = {
     "inlet": "patch",

@@ -9,14 +9,14 @@ never used in a fit or a comparison.
 The leakage matrix mixes two kinds of point: :class:`MatrixPoint`, a rotor-tip gap
 between two equal convex walls, and :class:`SectionPoint`, the real gap at the sealing
 line of the case's own rotors at a chosen outer-rotor angle, whose walls may slide at
-the rotor surface speeds (:mod:`rotorflow.geometry.sealing_gap`).  Each point's name is
-its folder under the runs directory: tip names start with ``g``, section names with
+the rotor surface speeds (the pair's gap sections, e.g.
+:mod:`rotorflow.geometry.internal_gear.sealing_gap`).  Each point's name is its folder
+under the runs directory: tip names start with ``g``, section names with
 ``seal-`` and a digest of the profile pair, so no two points ever share a folder.
 """
 
 from __future__ import annotations
 
-import hashlib
 import logging
 import math
 from collections.abc import Callable, Sequence
@@ -24,8 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from rotorflow.errors import CaseError
-from rotorflow.geometry.pin_gerotor import PinGerotor
-from rotorflow.geometry.sealing_gap import sealing_gap_walls, sealing_wall_speeds
+from rotorflow.geometry.family import RotorPair
 from rotorflow.postprocess.leakage import LeakagePoint
 from rotorflow.postprocess.richardson import Richardson, richardson
 
@@ -223,27 +222,24 @@ class MatrixPoint:
 class RotorMachine:
     """The rotor pair that section points are cut from, and how fast it turns."""
 
-    pair: PinGerotor
+    pair: RotorPair
     omega_outer_rad_s: float | None = None
-    """Outer-rotor speed [rad/s] (counter-clockwise); None: unknown, no moving walls."""
+    """Reference-rotor speed [rad/s] (counter-clockwise); None: unknown, no moving walls."""
 
     @property
     def tag(self) -> str:
         """A short digest of the profile pair: section points of different machines in
         one runs_dir never share a folder."""
-        p = self.pair
-        text = repr((p.lobes_outer, p.lam, p.sigma, p.diameter, p.fillet_kind,
-                     p.fillet_apex_diameter))
-        return hashlib.sha256(text.encode()).hexdigest()[:8]
+        return self.pair.digest()
 
 
 @dataclass(frozen=True)
 class SectionPoint:
     """One point of the leakage matrix on the real gap at a sealing line of the rotors:
-    the section of :func:`rotorflow.geometry.sealing_gap.sealing_gap_walls` at outer-rotor
+    the section of the pair's :meth:`~rotorflow.geometry.family.RotorPair.gap_walls` at outer-rotor
     angle ``rotor_angle_deg`` with the clearance ``gap_um`` on the outer rotor; with
     ``moving_walls`` the walls slide at the rotors' surface speeds relative to the
-    contact (:func:`~rotorflow.geometry.sealing_gap.sealing_wall_speeds`)."""
+    contact (:meth:`~rotorflow.geometry.family.RotorPair.wall_speeds`)."""
 
     gap_um: float
     pressure_ratio: float
@@ -270,12 +266,13 @@ class SectionPoint:
             return 0.0, 0.0
         if self.machine.omega_outer_rad_s is None:
             raise CaseError("moving walls need the rotor speed ([operating] speed_rpm)")
-        return sealing_wall_speeds(self.machine.pair, math.radians(self.rotor_angle_deg),
-                                   self.machine.omega_outer_rad_s)
+        return self.machine.pair.wall_speeds(math.radians(self.rotor_angle_deg),
+                                             self.machine.omega_outer_rad_s)
 
     def walls(self) -> GapWalls:
-        lower, upper = sealing_gap_walls(self.machine.pair, math.radians(self.rotor_angle_deg),
-                                         self.gap_um * 1e-6, outlet_ratio=OUTLET_GAP_RATIO)
+        lower, upper = self.machine.pair.gap_walls(math.radians(self.rotor_angle_deg),
+                                                   self.gap_um * 1e-6,
+                                                   outlet_ratio=OUTLET_GAP_RATIO)
         return GapWalls(lower, upper)
 
     def case(self, mesh: GapMeshSpec = SECTION_MESH) -> GapCase:
@@ -377,7 +374,7 @@ def matrix_from_section(
         for a in angles:
             for g in rotor_gaps:
                 try:  # cut each section once: a bad angle is named before anything runs
-                    sealing_gap_walls(machine.pair, math.radians(a), g * 1e-6)
+                    machine.pair.gap_walls(math.radians(a), g * 1e-6)
                 except CaseError as exc:
                     raise CaseError(f"rotor_angle_deg = {a:g} in [cfd] of {where}, gap "
                                     f"{g:g} um: {exc}") from None
@@ -386,7 +383,7 @@ def matrix_from_section(
     return points
 
 
-def validate_section(data: dict, where: str, pair: PinGerotor | None) -> None:
+def validate_section(data: dict, where: str, pair: RotorPair | None) -> None:
     """Check a case file's [cfd] section when the case is loaded (nothing is run).
 
     Section points are cut from ``pair``; moving walls need [operating] speed_rpm, whose
@@ -413,7 +410,8 @@ def rotor_machine(case, *, with_speed: bool = True) -> RotorMachine:
         from rotorflow.geometry.summary import build_machine
 
         driven = power_split(build_machine(case), case.volume_ratio).driven
-    ratio = 1.0 / case.pair.m21 if driven == "inner" else 1.0
+    # the reference (outer) rotor turns N_driven / N_reference times as fast as the driven
+    ratio = 1.0 / case.pair.rotor(driven).speed_ratio
     return RotorMachine(case.pair, float(speed) * ratio * math.pi / 30.0)
 
 

@@ -3,7 +3,8 @@
 Seed 000 sections 4.3-4.5: ideal gas, adiabatic compression, no leakage, no port
 losses and matched discharge, so the pressure of a chamber follows from its volume
 alone.  Torques here are those the rotors exert on the fluid (what a shaft supplies),
-the opposite of the fluid's torques in :class:`~.machine.ChamberCurves`.
+the opposite of the fluid's torques in :class:`~.machine.ChamberCurves`.  Written for
+any family: rotor r turns at ``speed_ratio[r]`` times the reference rotor (rotor 0).
 """
 
 from __future__ import annotations
@@ -13,7 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .machine import GAMMA_AIR, InternalGearMachine
+from .machine import SweptMachine
+
+#: Isentropic exponent of seed 000's ideal cycle (its section 4.3 takes air as a perfect
+#: gas with kappa = 1.4).  An assumption of that dimensionless design cycle, not a gas
+#: model: the quasi-1D model has the gases.
+GAMMA_AIR = 1.4
 
 
 def adiabatic_pressure(volume, eps_v: float, p_suction: float = 1.0e5, gamma: float = GAMMA_AIR):
@@ -46,13 +52,12 @@ def cycle_work(volume_max: float, eps_v: float, p_suction: float, gamma: float =
 
 @dataclass(frozen=True)
 class PowerSplit:
-    phi: np.ndarray  # one lobe period of outer-rotor angle
-    torque_outer: np.ndarray  # net shaft torque of the outer rotor on the fluid [N m]
-    torque_inner: np.ndarray
-    force_outer: np.ndarray  # (n, 2) net force of the fluid on the outer rotor [N]
-    power_ratio_outer: np.ndarray  # P1 / P_in
-    power_ratio_inner: np.ndarray  # P2 / P_in
-    mean_power_per_omega1: float  # T1_mean + m21 T2_mean
+    phi: np.ndarray  # one lobe period of reference-rotor angle
+    torque: np.ndarray  # (n, rotors) net shaft torque of each rotor on the fluid [N m]
+    force: np.ndarray  # (n, rotors, 2) net force of the fluid on each rotor [N]
+    power_ratio: np.ndarray  # (n, rotors) P_r / P_in
+    rotor_names: tuple[str, ...]
+    mean_power_per_omega1: float  # sum of speed_ratio_r T_r, mean
     cycle_power_per_omega1: float  # W_cyc N1 / (2 pi), Eq. 18
     driven: str
     pi_max: float
@@ -62,7 +67,7 @@ class PowerSplit:
         return abs(self.mean_power_per_omega1 / self.cycle_power_per_omega1 - 1.0)
 
 
-def _fold(phi, torque1, torque2, force1, pressure, per_period: int):
+def _fold(phi, torque, force, pressure, per_period: int):
     """Sum the loads of every chamber present (Eq. 16) over one lobe period.
 
     Chamber k lags the first by k periods; on a period-aligned grid a period is exactly
@@ -76,19 +81,19 @@ def _fold(phi, torque1, torque2, force1, pressure, per_period: int):
         x = np.concatenate([x, np.zeros((pad,) + x.shape[1:])])
         return x.reshape((reps, per_period) + x.shape[1:]).sum(0)
 
-    return (phi[:per_period], fold(pressure * torque1), fold(pressure * torque2),
-            fold(pressure[:, None] * force1))
+    return (phi[:per_period], fold(pressure[:, None] * torque),
+            fold(pressure[:, None, None] * force))
 
 
-def net_loads(machine: InternalGearMachine, pressure: np.ndarray):
-    """Net fluid torques on both rotors and net fluid force on the outer rotor over one
-    lobe period, for a pressure given on the chamber-curve grid."""
+def net_loads(machine: SweptMachine, pressure: np.ndarray):
+    """(phi, torque (n, rotors), force (n, rotors, 2)): the net fluid torques and forces
+    on every rotor over one lobe period, for a pressure given on the chamber-curve grid."""
     c = machine.curves
-    return _fold(c.phi, c.torque1, c.torque2, c.force1, pressure, machine.points_per_period)
+    return _fold(c.phi, c.torque, c.force, pressure, machine.points_per_period)
 
 
 def power_split(
-    machine: InternalGearMachine,
+    machine: SweptMachine,
     eps_v: float,
     driven: str = "auto",
     p_suction: float = 1.0e5,
@@ -101,29 +106,36 @@ def power_split(
     p = adiabatic_pressure(fine.volume, eps_v, p_suction, gamma)
     # Gauge pressure: a uniform pressure loads no rotor, so only p - p_suction matters,
     # and leaving it out keeps the sums free of cancellation.
-    phi, t1, t2, f1 = _fold(fine.phi, fine.torque1, fine.torque2, fine.force1, p - p_suction,
-                            machine.points_per_period * machine.section_refinement)
-    shaft1, shaft2 = -t1, -t2
-    m21 = machine.pair.m21
-    p_in = shaft1 + m21 * shaft2
-    r1 = shaft1 / p_in
-    r2 = m21 * shaft2 / p_in
+    phi, tq, force = _fold(fine.phi, fine.torque, fine.force, p - p_suction,
+                           machine.points_per_period * machine.section_refinement)
+    shaft = -tq
+    rotors = machine.pair.rotors
+    power = [r.speed_ratio * shaft[:, i] for i, r in enumerate(rotors)]
+    power[0] = shaft[:, 0]  # the reference rotor's ratio is 1: no product to round
+    p_in = power[0]
+    for extra in power[1:]:
+        p_in = p_in + extra
+    ratio = np.stack([x / p_in for x in power], 1)
     # Eq. 18 with the cycle work of the chamber's own p-V loop; for a conjugate pair
     # (no clearance volume) it equals the closed form of Eq. 17 (see tests).
     c = machine.curves
     p_c = adiabatic_pressure(c.volume, eps_v, p_suction, gamma)
     w = -float(np.trapezoid((p_c - p_suction) * c.dvolume, c.phi))
-    cycle = w * machine.pair.lobes_outer / (2.0 * math.pi)
+    cycle = w * rotors[0].lobes / (2.0 * math.pi)
+    names = tuple(r.name for r in rotors)
     if driven == "auto":
-        driven = "outer" if r1.max() > r2.max() else "inner"
-    idle = r2 if driven == "outer" else r1
+        driven = names[int(np.argmax(ratio.max(0)))]
+    if driven not in names:
+        raise ValueError(f"driven rotor {driven!r} is none of {names}")
+    # Pi_max (seed 000 Eq. 22): the largest share of the input power that passes through
+    # a rotor that is not driven, i.e. through the gearing contact.
+    idle = np.delete(ratio, names.index(driven), axis=1)
     return PowerSplit(
         phi=phi,
-        torque_outer=shaft1,
-        torque_inner=shaft2,
-        force_outer=f1,
-        power_ratio_outer=r1,
-        power_ratio_inner=r2,
+        torque=shaft,
+        force=force,
+        power_ratio=ratio,
+        rotor_names=names,
         mean_power_per_omega1=float(np.mean(p_in)),
         cycle_power_per_omega1=cycle,
         driven=driven,

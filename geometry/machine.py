@@ -1,4 +1,4 @@
-"""A swept internal-gear machine: chamber curves, forces, torques and power split.
+"""A swept rotor pair of any family: chamber curves, loads and sealing lines along z.
 
 Volumes, forces and torques of a 3D chamber are integrals along z of the section
 chamber (seed 000 Eq. 7 and Eqs. 13-15, generalised by the scale and twist laws of
@@ -24,11 +24,9 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import minimize_scalar
 from scipy.signal import fftconvolve
 
-from .pin_gerotor import TWO_PI, PinGerotor
-from .section import POINTS_PER_PERIOD, SectionChamber, section_chamber
+from .family import RotorPair
+from .section import POINTS_PER_PERIOD, SectionChamber
 from .sweep import Sweep
-
-GAMMA_AIR = 1.4
 
 #: Section-table samples per step of the chamber curves.  The load error is the section
 #: table's, O(h^1.5) at its kinks: 32 (3072 per period at the default 96) puts Pi_max of
@@ -48,9 +46,8 @@ class ChamberLoads:
 
     phi: np.ndarray
     volume: np.ndarray
-    force1: np.ndarray  # (n, 2) force of the fluid on the outer rotor per unit pressure
-    torque1: np.ndarray  # torque of the fluid on the outer rotor per unit pressure
-    torque2: np.ndarray  # same on the inner rotor, about its own axis
+    force: np.ndarray  # (n, rotors, 2) force of the fluid on each rotor per unit pressure
+    torque: np.ndarray  # (n, rotors) torque of the fluid on each rotor about its axis
     step: float
 
 
@@ -63,9 +60,8 @@ class ChamberCurves:
     dvolume: np.ndarray
     area_lp: np.ndarray
     area_hp: np.ndarray
-    force1: np.ndarray  # (n, 2) force of the fluid on the outer rotor per unit pressure
-    torque1: np.ndarray  # torque of the fluid on the outer rotor per unit pressure
-    torque2: np.ndarray  # same on the inner rotor, about its own axis
+    force: np.ndarray  # (n, rotors, 2) force of the fluid on each rotor per unit pressure
+    torque: np.ndarray  # (n, rotors) torque of the fluid on each rotor about its axis
     perimeter_lp: np.ndarray  # rotor edge length of the chamber on the lp end plate
     perimeter_hp: np.ndarray
     step: float
@@ -122,15 +118,17 @@ def _symmetric(lines: dict[int, np.ndarray], per_period: int) -> dict[int, np.nd
 
 
 @dataclass(frozen=True)
-class InternalGearMachine:
-    pair: PinGerotor
+class SweptMachine:
+    """A family's pair swept along z: the 3D chamber against its low-pressure-end angle."""
+
+    pair: RotorPair
     sweep: Sweep
     points_per_period: int = POINTS_PER_PERIOD
     section_refinement: int = SECTION_REFINEMENT
 
     @cached_property
     def section(self) -> SectionChamber:
-        return section_chamber(self.pair, self.points_per_period * self.section_refinement)
+        return self.pair.section(self.points_per_period * self.section_refinement)
 
     @cached_property
     def loads(self) -> ChamberLoads:
@@ -144,18 +142,19 @@ class InternalGearMachine:
 
         volume = np.maximum(sweep(sec.area, k2), 0.0)
         step = sec.psi[1] - sec.psi[0]
+        rotors = range(sec.torque.shape[1])
         return ChamberLoads(
             phi=sec.psi[0] + step * np.arange(len(volume)),
             volume=volume,
-            force1=np.stack([sweep(sec.dy, k1), -sweep(sec.dx, k1)], -1),
-            torque1=sweep(sec.tq1, k2),
-            torque2=sweep(sec.tq2, k2),
+            force=np.stack([np.stack([sweep(sec.force[:, r, c], k1) for c in (0, 1)], -1)
+                            for r in rotors], 1),
+            torque=np.stack([sweep(sec.torque[:, r], k2) for r in rotors], 1),
             step=step,
         )
 
     @property
     def period(self) -> float:
-        return TWO_PI / self.pair.lobes_outer
+        return self.pair.period
 
     @property
     def life_2d(self) -> float:
@@ -168,10 +167,11 @@ class InternalGearMachine:
 
     @property
     def pitch_length(self) -> float | None:
-        """Seed 000 Eq. 23 (constant lead only); None for straight rotors."""
+        """Axial advance of the rotor per lobe period, seed 000 Eq. 23 (constant lead
+        only); None for straight rotors."""
         if self.sweep.wrap == 0.0:
             return None
-        return TWO_PI * self.sweep.length / (self.pair.lobes_outer * self.sweep.wrap)
+        return self.period * self.sweep.length / self.sweep.wrap
 
     @cached_property
     def curves(self) -> ChamberCurves:
@@ -209,16 +209,15 @@ class InternalGearMachine:
         # The spline may undershoot by ~1e-10 of the maximum where the area rises from
         # zero like the fourth power of the angle; areas and volumes cannot be negative.
         volume, area_lp, area_hp = (np.maximum(x, 0.0) for x in (volume, area_lp, area_hp))
-        per = _extend(sec, sec.perimeter_outer + sec.perimeter_inner)
+        per = _extend(sec, sec.perimeter.sum(1))
         return ChamberCurves(
             phi=phi,
             volume=volume,
             dvolume=dvolume,
             area_lp=area_lp,
             area_hp=area_hp,
-            force1=coarse(fine.force1),
-            torque1=coarse(fine.torque1),
-            torque2=coarse(fine.torque2),
+            force=coarse(fine.force),
+            torque=coarse(fine.torque),
             perimeter_lp=np.maximum(_eval(per, phi), 0.0),
             perimeter_hp=np.maximum(_eval(per, phi - sw.wrap), 0.0) * float(sw.scale(sw.length)),
             step=step,
@@ -285,8 +284,8 @@ class InternalGearMachine:
 
     @property
     def swept_volume(self) -> float:
-        """Volume drawn in per outer-rotor revolution: N1 V_max (seed 000, section 3.1.1)."""
-        return self.pair.lobes_outer * self.volume_max
+        """Volume drawn in per reference-rotor revolution: N1 V_max (seed 000, 3.1.1)."""
+        return self.pair.rotors[0].lobes * self.volume_max
 
     @property
     def cylinder_volume(self) -> float:

@@ -1,4 +1,4 @@
-"""End-plate ports of an internal-gear machine, as planar regions in the machine frame.
+"""End-plate ports of a swept machine (any family), as planar regions in the machine frame.
 
 Port model: a port is what the working chamber's end-face section covers while the
 chamber is open to it, less what the section covers while the chamber must be sealed
@@ -14,8 +14,9 @@ follows the quasi-1D model's rules: suction closes at the volume maximum and dis
 opens where the volume has fallen to ``V_max / volume_ratio``, unless [operating]
 gives ``suction_close_deg`` / ``discharge_open_deg`` (angles since birth).
 
-The section of the chamber during the split phases near the deep mesh is only the
-sub-regions that belong to it (:meth:`PinSpace.region_areas`).  Sections are sampled at
+The chamber's section is the family's (:meth:`RotorPair.chamber_polygons`); where it is
+split into sub-regions (the internal gear's deep mesh), only those that belong to it.
+Sections are sampled at
 ``STEP_PER_PERIOD`` angles per lobe period (``SPLIT_REFINE`` times more in the split
 phases, where thin sub-regions move fast), the strip a chamber's tip sweeps between two
 samples is added as the hull of both tips, and the pieces are joined exactly
@@ -31,15 +32,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
 from rotorflow.errors import CaseError
 
-from .machine import InternalGearMachine
-from .pin_gerotor import TWO_PI, rotate
-from .pin_space import Contact, PinSpace
+from .machine import SweptMachine
 
 #: Angles per lobe period at which the chamber section is added to a port, and how many
 #: times more during the split phases near the deep mesh.
@@ -47,15 +45,9 @@ STEP_PER_PERIOD = 24
 SPLIT_REFINE = 8
 #: Holes of a port smaller than this fraction of its area are sampling strips, filled.
 HOLE_FRACTION = 0.01
-#: Boundary sample spacing of one chamber section [m] (a port is a model: 0.1 mm keeps
-#: the chord error of a 10 mm radius near 0.1 um).
+#: Scale of the tip hulls' reach [m]: about the boundary spacing of the families' chamber
+#: polygons (0.1 mm).
 SECTION_SPACING = 1e-4
-
-
-@lru_cache(maxsize=8)
-def _space(pair) -> PinSpace:
-    """One PinSpace per pair: its fits are built once."""
-    return PinSpace(pair)
 
 
 @dataclass(frozen=True)
@@ -67,7 +59,7 @@ class PortTiming:
     death: float
 
 
-def port_timing(machine: InternalGearMachine, volume_ratio: float,
+def port_timing(machine: SweptMachine, volume_ratio: float,
                 suction_close: float | None = None,
                 discharge_open: float | None = None) -> PortTiming:
     cur = machine.curves
@@ -95,77 +87,14 @@ def port_timing(machine: InternalGearMachine, volume_ratio: float,
     return PortTiming(sc, do, death)
 
 
-def _arc(fn, a, b, length):
-    n = max(int(math.ceil(length / SECTION_SPACING)), 2)
-    return fn(np.linspace(a, b, n))
+def chamber_section(machine: SweptMachine, phi: float, contacts: list | None = None):
+    """Polygons (fixed frame, unit scale) of the working chamber's section at angle phi
+    (the planar-chamber angle); empty outside the chamber's life.  The contact points
+    bounding them are appended to ``contacts`` if given."""
+    return machine.pair.chamber_polygons(phi, contacts)
 
 
-def _region_polygon(space: PinSpace, a: Contact, b: Contact, phi: float) -> np.ndarray:
-    """Boundary (fixed frame, ccw) of the sub-region between contacts a and b at phi."""
-    p = space.pair
-    n1 = p.lobes_outer
-    e = p.pin_edge
-    g_lo, g_hi = p.fillet_range if p.fillet_kind == "conjugate" else (0.0, 0.0)
-    parts = []
-    if a.kind == "pin":
-        parts.append(_arc(lambda t: p.pin_point(-1, t), a.psi1, -e, p.rho * abs(a.psi1 + e)))
-        g_start = g_hi
-    else:
-        g_start = a.psi1
-    if p.fillet_kind == "arc":
-        c, r, a0, a1 = p.arc_fillet
-        cc = rotate(np.asarray(c), -TWO_PI / n1)
-        parts.append(_arc(lambda t: cc + r * np.stack([np.cos(t - TWO_PI / n1),
-                                                       np.sin(t - TWO_PI / n1)], -1),
-                          a0, a1, r * abs(a1 - a0)))
-    else:
-        g_end = b.psi1 if b.kind == "fillet" else g_lo
-        length = abs(float(space.fillet_arc(g_start) - space.fillet_arc(g_end)))
-        parts.append(_arc(lambda t: rotate(space.fillet_point(t), -TWO_PI / n1),
-                          g_start, g_end, length))
-    if b.kind == "pin":
-        parts.append(_arc(lambda t: p.pin_point(0, t), e, b.psi1, p.rho * abs(e - b.psi1)))
-    outer = np.concatenate(parts)  # S1
-    length = abs(float(space.inner_arc(a.g2) - space.inner_arc(b.g2)))
-    y = _arc(p.inner_point, b.g2, a.g2, length)  # S2
-    inner = rotate(rotate(y, p.m21 * phi) + p.O2, -phi)  # S1
-    poly = rotate(np.concatenate([outer, inner]), phi)
-    # drop repeated points where the pieces meet
-    keep = np.append(np.linalg.norm(np.diff(poly, axis=0), axis=-1) > 1e-12, True)
-    return poly[keep]
-
-
-def chamber_section(machine: InternalGearMachine, phi: float,
-                    space: PinSpace | None = None, contacts: list | None = None):
-    """Polygons (fixed frame, unit scale) of the working chamber's section at angle phi.
-
-    ``phi`` is the planar-chamber angle (section.py); empty outside the chamber's life.
-    The contact points bounding them are appended to ``contacts`` if given.
-    """
-    sec = machine.section
-    if not sec.phi_i < phi < sec.phi_f:
-        return []
-    space = space or _space(machine.pair)
-    cs, areas, touched = space.region_areas(phi)
-    if machine.pair.fillet_kind == "conjugate":
-        t_lo, t_hi = space.fillet_time_range
-        phi_j = sec.phi_i + (t_hi - t_lo)
-        birth = phi < phi_j + 1e-12
-        split = phi < phi_j or phi > sec.phi_f - (phi_j - sec.phi_i)
-    else:
-        split, birth = False, False
-    if len(cs) == 2 or not split:
-        keep = list(range(len(areas)))
-    else:
-        keep = [k for k in range(len(areas)) if touched[k] == birth]
-    keep = [k for k in keep if areas[k] > 0.0]
-    if contacts is not None:
-        for k in keep:
-            contacts.extend([cs[k].point, cs[k + 1].point])
-    return [_region_polygon(space, cs[k], cs[k + 1], phi) for k in keep]
-
-
-def port_region(machine: InternalGearMachine, start: float, stop: float, face: str,
+def port_region(machine: SweptMachine, start: float, stop: float, face: str,
                 hulls: bool = False):
     """The union of the chamber's ``face`` ("lp"/"hp") sections for ages in [start, stop]
     (with ``hulls``, also what the chamber's tips sweep between the samples).
@@ -179,13 +108,12 @@ def port_region(machine: InternalGearMachine, start: float, stop: float, face: s
     shift = 0.0 if face == "lp" else sw.wrap
     scale = float(sw.scale(0.0 if face == "lp" else sw.length))
     ages = _ages(machine, start, stop, shift)
-    space = _space(machine.pair)
     pieces = []
     prev = None
     for age in ages:
         psi = sec.phi_i + age - shift
         contacts = []
-        polys = [q for q in chamber_section(machine, psi, space, contacts) if len(q) >= 3]
+        polys = [q for q in chamber_section(machine, psi, contacts) if len(q) >= 3]
         pieces.extend(CrossSection([np.ascontiguousarray(q * scale)], FillRule.Positive)
                       for q in polys)
         if hulls and prev is not None and polys:
@@ -196,15 +124,12 @@ def port_region(machine: InternalGearMachine, start: float, stop: float, face: s
     return _fill_small_holes(CrossSection.batch_boolean(pieces, OpType.Add))
 
 
-def _ages(machine: InternalGearMachine, start: float, stop: float, shift: float) -> np.ndarray:
+def _ages(machine: SweptMachine, start: float, stop: float, shift: float) -> np.ndarray:
     """Sample ages: STEP_PER_PERIOD per lobe period, SPLIT_REFINE times more while the
     section is split near the deep mesh (thin sub-regions that move fast)."""
     sec = machine.section
-    step = TWO_PI / machine.pair.lobes_outer / STEP_PER_PERIOD
-    split = 0.0
-    if machine.pair.fillet_kind == "conjugate":
-        t_lo, t_hi = _space(machine.pair).fillet_time_range
-        split = t_hi - t_lo
+    step = machine.pair.period / STEP_PER_PERIOD
+    split = machine.pair.split_phase
     life = sec.phi_f - sec.phi_i
     ages = [np.arange(start, stop + 0.5 * step, step)]
     for a0 in (shift, shift + life - split):  # the split phases, in ages
@@ -260,7 +185,7 @@ def _tip_hulls(prev, cur, scale):
     return out
 
 
-def ports(machine: InternalGearMachine, timing: PortTiming):
+def ports(machine: SweptMachine, timing: PortTiming):
     """(suction on the lp plate, discharge on the hp plate) as CrossSections.
 
     Each is what the chamber's face section covers while it is open to the port, less

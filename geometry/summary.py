@@ -7,61 +7,54 @@ import math
 import numpy as np
 
 from .forces import power_split
-from .machine import InternalGearMachine
+from .machine import SweptMachine
+from .section import POINTS_PER_PERIOD
 from .table import ChamberTable
 
 
-def build_machine(case, points_per_period: int | None = None) -> InternalGearMachine:
-    from .section import POINTS_PER_PERIOD, section_chamber
-
+def build_machine(case, points_per_period: int | None = None) -> SweptMachine:
+    """The case's pair swept by its sweep law (a wrap given as wrap_bar needs the
+    chamber's planar life first)."""
     ppp = points_per_period or POINTS_PER_PERIOD
     life = None
     if case.wrap is None:
-        sec = section_chamber(case.pair, ppp)
+        sec = case.pair.section(ppp)
         life = sec.phi_f - sec.phi_i
-    return InternalGearMachine(case.pair, case.sweep(life), ppp)
+    return SweptMachine(case.pair, case.sweep(life), ppp)
 
 
 def _deg(x):
     return math.degrees(x)
 
 
-def geometry_figures(case, machine: InternalGearMachine | None = None) -> dict:
+def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
+    """The family's own figures, then the sweep's, volumes, loads and port timing."""
     m = machine or build_machine(case)
     pair, sec, cur = m.pair, m.section, m.curves
     d = pair.diameter
-    n1 = pair.lobes_outer
+    reference = pair.rotors[0]
     split = power_split(m, case.volume_ratio, case.driven)
     v_sw_bar = m.swept_volume / m.cylinder_volume
-    n_dr = pair.lobes_inner if split.driven == "inner" else n1
-    alpha = pair.pressure_angle
+    n_dr = pair.rotor(split.driven).lobes
     phi = cur.phi
     k_max = int(np.argmax(cur.volume))
     suction_close = phi[np.nonzero(cur.area_lp > 0.0)[0][-1]]
     discharge_open = phi[np.nonzero(cur.area_hp > 0.0)[0][0]]
+    wraps = {f"wrap_{r.name}_deg": _deg(m.sweep.wrap * abs(r.speed_ratio)) if i else
+             _deg(m.sweep.wrap) for i, r in enumerate(pair.rotors)}
     return {
         "case": case.name,
-        "lobes_outer": n1,
-        "lobes_inner": pair.lobes_inner,
-        "m21": pair.m21,
-        "lambda": pair.lam,
-        "sigma": pair.sigma,
-        "sigma_lim": pair.sigma_lim,
-        "sigma_bar": pair.sigma / pair.sigma_lim,
-        "E_over_D": pair.E / d,
-        "a_over_D": pair.a / d,
-        "rho_over_D": pair.rho / d,
-        "pressure_angle_deg": None if alpha is None else _deg(alpha),
-        "pitch_point_contact": alpha is not None,
+        "machine": pair.family,
+        **pair.figures(),
         "phi_i_deg": _deg(sec.phi_i),
         "phi_f_deg": _deg(sec.phi_f),
-        "wrap_outer_deg": _deg(m.sweep.wrap),
-        "wrap_inner_deg": _deg(m.sweep.wrap * pair.m21),
+        **wraps,
         "wrap_bar": m.wrap_bar,
         "pitch_over_length": None if m.pitch_length is None else m.pitch_length / m.sweep.length,
         "A_wc_bar_max": 4.0 * sec.area_max / (math.pi * d * d),
         "V_sw_bar": v_sw_bar,
-        "V_dr_bar": v_sw_bar * n_dr / n1,
+        # per revolution of the driven rotor (seed 000 section 5)
+        "V_dr_bar": v_sw_bar * n_dr / reference.lobes,
         "driven": split.driven,
         "Pi_max": split.pi_max,
         "power_balance_error": split.power_balance_error,
@@ -76,13 +69,15 @@ def geometry_figures(case, machine: InternalGearMachine | None = None) -> dict:
     }
 
 
-def chamber_table(case, machine: InternalGearMachine | None = None) -> ChamberTable:
+def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     """The chamber table the quasi-1D model reads (see :mod:`.table`)."""
     m = machine or build_machine(case)
     cur = m.curves
     pair = m.pair
-    ratio = {"inner": pair.lobes_inner / pair.lobes_outer, "outer": 1.0}
     driven = case.driven if case.driven != "auto" else power_split(m, case.volume_ratio).driven
+    # Reference-rotor turns per driven-rotor turn: the inverse of the speed ratio, from
+    # the lobe counts (exact for gearing, N_driven / N_reference).
+    ratio = pair.rotor(driven).lobes / pair.rotors[0].lobes
     lines = m.seal_lines
     zero = np.zeros_like(cur.phi)
     return ChamberTable(
@@ -95,10 +90,10 @@ def chamber_table(case, machine: InternalGearMachine | None = None) -> ChamberTa
         seal_prev_m=lines.get(-1, zero),
         seal_lp_face_m=cur.perimeter_lp,
         seal_hp_face_m=cur.perimeter_hp,
-        lobes_outer=pair.lobes_outer,
-        # outer-rotor speed = driven speed x (N_driven / N1)... inner turns m21 times faster
-        speed_ratio_outer_per_driven=ratio[driven],
+        lobes_outer=pair.rotors[0].lobes,
+        speed_ratio_outer_per_driven=ratio,
         length_m=m.sweep.length,
         diameter_m=pair.diameter,
         seal_far={d: v for d, v in lines.items() if abs(d) >= 2},
+        machine=pair.family,
     )

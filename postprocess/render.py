@@ -1,7 +1,7 @@
 """Off-screen pictures of a case's rotors and chambers for the report (pyvista / VTK).
 
-The surfaces are the analytic swept flanks of :class:`rotorflow.geometry.solids.SweptSurface`
-(the profiles of :mod:`rotorflow.geometry.profile_curves`, sampled to a chordal
+The surfaces are the analytic swept flanks of :class:`rotorflow.geometry.export.solids.SweptSurface`
+(the pair's rotor profiles (:mod:`rotorflow.geometry.curves`), sampled to a chordal
 tolerance), evaluated on a (u, z) grid: the pictures show the case's own geometry, not
 a generic drawing.
 
@@ -52,8 +52,8 @@ def _offscreen():
 
 
 def _surfaces(case, wrap_outer_deg: float):
-    from rotorflow.geometry.profile_curves import inner_profile, outer_profile, sample
-    from rotorflow.geometry.solids import SweptSurface
+    from rotorflow.geometry.curves import sample
+    from rotorflow.geometry.export.solids import SweptSurface
     from rotorflow.geometry.sweep import Sweep
 
     pair = case.pair
@@ -63,8 +63,8 @@ def _surfaces(case, wrap_outer_deg: float):
     nz = max(2, int(math.ceil(wrap_outer_deg * LEVELS_PER_DEG)) + 1)
     z = np.linspace(0.0, case.length, nz)
     out = []
-    for prof, omega, centre in ((outer_profile(pair), 1.0, (0.0, 0.0)),
-                                (inner_profile(pair), pair.m21, tuple(pair.O2))):
+    for rotor in pair.rotors:
+        prof, omega, centre = rotor.profile, rotor.speed_ratio, tuple(rotor.axis)
         u = sample(prof, PROFILE_TOL * d, PROFILE_STEP * d)
         surf = SweptSurface(prof, sweep, 0.0, omega, centre)
         pts = surf.point(u[None, :], z[:, None])  # (nz, nu, 3)
@@ -151,7 +151,8 @@ def render_case(case, folder: Path, wrap_outer_deg: float) -> list[Path]:
     for mesh, colour in ((outer, OUTER_COLOUR), (inner, INNER_COLOUR)):
         plotter.add_mesh(mesh, color=colour, smooth_shading=True, split_sharp_edges=True,
                          specular=0.3)
-    plotter.add_text(f"{case.name}: N1 = {case.pair.lobes_outer}, lambda = {case.pair.lam:.4g}, "
+    lobes = "/".join(str(r.lobes) for r in case.pair.rotors)
+    plotter.add_text(f"{case.name}: {case.pair.family} {lobes}, "
                      f"{case.sweep_kind}, wrap {wrap_outer_deg:.1f} deg", font_size=10,
                      color="black")
     cx, cy, _ = CAMERA_DIRECTION

@@ -9,7 +9,7 @@ import pytest
 import scipy
 
 REPO = Path(__file__).resolve().parents[1]
-CASES = REPO / "cases"
+CASES = REPO / "examples"
 REFERENCE = REPO / "tests" / "data" / "reference"
 
 

@@ -264,7 +264,7 @@ def test_compression_of_the_default_case():
     from rotorflow.quasi1d import Operating
     from rotorflow.workflow.case import load_case
 
-    case = load_case(Path(__file__).resolve().parents[1] / "cases" / "default.toml")
+    case = load_case(Path(__file__).resolve().parents[1] / "examples" / "default.toml")
     table = chamber_table(case)
     op = Operating.from_section(case.raw["operating"])
     comp = chamber_case.compression_from_table(table, op, LEAKAGE)

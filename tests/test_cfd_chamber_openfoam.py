@@ -1,6 +1,6 @@
 """Case B with real OpenFOAM runs (openfoam tier; ~1.5 min on 2 cores, the slow test ~5 min).
 
-The default case's chamber (cases/default.toml) through its compression phase: sealed
+The default case's chamber (examples/default.toml) through its compression phase: sealed
 (the mesh-motion check against p V^gamma = const), leaking through its 20 um gap (the
 comparison with the quasi-1D models), a run that fails (marked, never compared) and the
 workflow stage.  Skipped with a reason when OpenFOAM is not installed.
@@ -31,7 +31,7 @@ pytestmark = [
 ]
 
 REPO = Path(__file__).resolve().parents[1]
-DEFAULT = REPO / "cases" / "default.toml"
+DEFAULT = REPO / "examples" / "default.toml"
 DATA = REPO / "tests" / "data" / "cfd" / "chamber"
 LEAKAGE = Leakage(gap_m=20e-6, model="nozzle", coefficient=0.8)
 

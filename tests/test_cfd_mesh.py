@@ -10,8 +10,8 @@ import pytest
 
 from rotorflow.cases import gap_mesh
 from rotorflow.cases.gap_mesh import GapMeshSpec, GapWalls
-from rotorflow.cases.gmsh_session import gmsh_session
 from rotorflow.errors import CaseError, ExternalRunError
+from rotorflow.gmsh_session import gmsh_session
 
 # --- walls (pure numpy/scipy) -------------------------------------------------------------
 

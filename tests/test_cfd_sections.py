@@ -15,8 +15,8 @@ from rotorflow.cases.gap_study import (
     rotor_machine,
 )
 from rotorflow.errors import CaseError
-from rotorflow.geometry.pin_gerotor import PinGerotor, sigma_limit
-from rotorflow.geometry.sealing_gap import sealing_wall_speeds
+from rotorflow.geometry.internal_gear.pair import PinGerotor, sigma_limit
+from rotorflow.geometry.internal_gear.sealing_gap import sealing_wall_speeds
 from rotorflow.workflow.case import load_case
 
 from .conftest import CASES

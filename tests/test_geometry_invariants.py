@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from rotorflow.geometry.forces import net_loads
-from rotorflow.geometry.machine import InternalGearMachine
-from rotorflow.geometry.pin_gerotor import PinGerotor, sigma_limit
+from rotorflow.geometry.internal_gear.pair import PinGerotor, sigma_limit
+from rotorflow.geometry.machine import SweptMachine
 from rotorflow.geometry.sweep import Sweep
 
 PAIR = PinGerotor(5, 1.3, sigma_limit(5, 1.3), 0.1)
@@ -15,7 +15,7 @@ L = 0.12
 
 
 def machine(sweep, ppp=96, pair=PAIR):
-    return InternalGearMachine(pair, sweep, ppp)
+    return SweptMachine(pair, sweep, ppp)
 
 
 def test_helical_tends_to_straight_as_wrap_vanishes():
@@ -30,7 +30,7 @@ def test_helical_tends_to_straight_as_wrap_vanishes():
 
 def test_straight_volume_is_area_times_length():
     # By symmetry the largest straight chamber sits at phi = pi (1 + 1/N1) (seed 000).
-    from rotorflow.geometry.pin_space import PinSpace
+    from rotorflow.geometry.internal_gear.space import PinSpace
 
     m = machine(Sweep("straight", L))
     a_max = PinSpace(PAIR).whole_space(np.array([math.pi * (1 + 1 / 5)]))[0][0]
@@ -41,7 +41,7 @@ def test_conical_with_unit_scale_equals_helical():
     hel = machine(Sweep("helical", L, 2.0)).curves
     con = machine(Sweep("conical", L, 2.0, scale_end=1.0, lead_ratio=1.0)).curves
     np.testing.assert_allclose(con.volume, hel.volume, rtol=0, atol=1e-15)
-    np.testing.assert_allclose(con.torque1, hel.torque1, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(con.torque, hel.torque, rtol=0, atol=1e-15)
 
 
 def test_conical_volume_scales_with_integral_of_scale_squared():
@@ -57,18 +57,17 @@ def test_conical_volume_scales_with_integral_of_scale_squared():
 def test_net_force_and_torque_vanish_at_uniform_pressure(sweep):
     m = machine(sweep)
     p = np.full_like(m.curves.volume, 3.0e5)
-    _, t1, t2, f1 = net_loads(m, p)
+    _, torque, force = net_loads(m, p)
     scale = 3.0e5 * m.pair.diameter**2 * L
-    assert np.abs(t1).max() < 1e-9 * scale
-    assert np.abs(t2).max() < 1e-9 * scale
-    assert np.abs(f1).max() < 1e-9 * 3.0e5 * m.pair.diameter * L
+    assert np.abs(torque).max() < 1e-9 * scale
+    assert np.abs(force).max() < 1e-9 * 3.0e5 * m.pair.diameter * L
 
 
 def test_power_identity_section_by_section():
     # Kinematics: dA/dphi1 = (torque on outer) + m21 (torque on inner) per unit pressure.
     sec = machine(Sweep("straight", L), ppp=384).section
     dA = np.gradient(sec.area, sec.psi)
-    resid = dA - (sec.tq1 + sec.m21 * sec.tq2)
+    resid = dA - (sec.torque[:, 0] + PAIR.m21 * sec.torque[:, 1])
     assert np.abs(resid[1:-1]).max() < 1e-4 * np.abs(dA).max()
 
 

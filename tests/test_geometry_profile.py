@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from rotorflow.errors import CaseError
-from rotorflow.geometry.pin_gerotor import PinGerotor, pressure_angle_at_pitch, sigma_limit
-from rotorflow.geometry.pin_space import PinSpace
+from rotorflow.geometry.internal_gear.pair import PinGerotor, pressure_angle_at_pitch, sigma_limit
+from rotorflow.geometry.internal_gear.space import PinSpace
 
 
 @pytest.fixture(scope="module")

@@ -7,9 +7,10 @@ import pytest
 
 from rotorflow.cases.gap_mesh import GapWalls
 from rotorflow.errors import CaseError
-from rotorflow.geometry.pin_gerotor import PinGerotor, rotate, sigma_limit
-from rotorflow.geometry.pin_space import PinSpace
-from rotorflow.geometry.sealing_gap import sealing_gap_walls, sealing_wall_speeds
+from rotorflow.geometry.internal_gear.pair import PinGerotor, sigma_limit
+from rotorflow.geometry.internal_gear.sealing_gap import sealing_gap_walls, sealing_wall_speeds
+from rotorflow.geometry.internal_gear.space import PinSpace
+from rotorflow.geometry.planar import rotate
 
 PAIR = PinGerotor(6, 1.39934, sigma_limit(6, 1.39934), 0.1)
 

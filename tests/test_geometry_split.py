@@ -5,12 +5,12 @@ import math
 import numpy as np
 import pytest
 
-from rotorflow.geometry.contacts import contact_table, pitch_point_distance
 from rotorflow.geometry.forces import power_split
-from rotorflow.geometry.machine import InternalGearMachine
-from rotorflow.geometry.pin_gerotor import PinGerotor, sigma_limit
-from rotorflow.geometry.pin_space import PinSpace
-from rotorflow.geometry.split_space import SplitSpace
+from rotorflow.geometry.internal_gear.contacts import contact_table, pitch_point_distance
+from rotorflow.geometry.internal_gear.pair import PinGerotor, sigma_limit
+from rotorflow.geometry.internal_gear.space import PinSpace
+from rotorflow.geometry.internal_gear.split import SplitSpace
+from rotorflow.geometry.machine import SweptMachine
 from rotorflow.geometry.sweep import Sweep
 
 # Three birth patterns of Table 1 (seed 000): N1 = 6 and 3 are born at a pin junction,
@@ -78,7 +78,7 @@ def test_pi_max_converges_with_the_section_refinement():
     # refinement alone converges it (the default, 32, is within 1e-4 of 128).
     pair = PAIRS[0]
     sweep = Sweep("helical", 0.1, math.radians(136))
-    values = {r: power_split(InternalGearMachine(pair, sweep, 48, r), 2.0, "inner").pi_max
+    values = {r: power_split(SweptMachine(pair, sweep, 48, r), 2.0, "inner").pi_max
               for r in (4, 64, 256)}
     assert abs(values[64] / values[256] - 1) < 1e-4
     assert abs(values[4] / values[256] - 1) > 10 * abs(values[64] / values[256] - 1)
@@ -100,7 +100,7 @@ def test_contact_table_obeys_the_law_of_gearing():
 def test_neighbour_labels_are_seen_alike_from_both_sides():
     # The line between a chamber and the one d periods older, at section angle psi, is
     # that chamber's line to this one at psi + d periods: labels must mirror.
-    from rotorflow.geometry.section import section_chamber
+    from rotorflow.geometry.internal_gear.section import section_chamber
 
     pair = PAIRS[0]
     sec = section_chamber(pair, 96)
@@ -122,7 +122,7 @@ def test_straight_sealing_lines_are_the_rotor_length():
     # live chamber add up to two rotor lengths (leading + trailing), whatever their
     # neighbours, and the table keeps one line per pair of chambers.
     L = 0.1
-    m = InternalGearMachine(PAIRS[0], Sweep("straight", L), 48)
+    m = SweptMachine(PAIRS[0], Sweep("straight", L), 48)
     total = sum(m.seal_lines.values())
     live = m.curves.volume > 1e-6 * m.volume_max
     exact = np.isclose(total[live], 2 * L, rtol=1e-9)

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from rotorflow.geometry import machining
-from rotorflow.geometry.profile_curves import closest, inner_profile, outer_profile, sample
+from rotorflow.geometry.curves import closest, sample
+from rotorflow.geometry.export import csvfile, dxf, ply
+from rotorflow.geometry.internal_gear.profiles import inner_profile, outer_profile
 from rotorflow.workflow.case import load_case
 
 from .conftest import CASES
@@ -62,11 +63,11 @@ def test_export_writes_what_is_asked_and_only_that(tmp_path):
     # profiles: closed polylines whose vertices lie on the analytic profile (clearance
     # included: the outer one is offset by 10 um) and whose chords stay within 20 um
     for name, prof in (("outer", outer_profile(c.pair)), ("inner", inner_profile(c.pair))):
-        pts = machining.read_profile_csv(out / f"{name}_profile.csv") * 1e-3
+        pts = csvfile.read_profile_csv(out / f"{name}_profile.csv") * 1e-3
         assert np.array_equal(pts[0], pts[-1])
-        dxf, closed = machining.read_profile_dxf(out / f"{name}_profile.dxf")
+        poly, closed = dxf.read(out / f"{name}_profile.dxf")
         assert closed
-        np.testing.assert_allclose(dxf * 1e-3, pts[:-1], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(poly * 1e-3, pts[:-1], rtol=0, atol=1e-12)
         u0 = sample(prof, 1e-6)
         _, i = cKDTree(prof.point(u0)).query(pts)
         _, d, _ = closest(prof, pts, u0[i], iterations=12)
@@ -75,10 +76,10 @@ def test_export_writes_what_is_asked_and_only_that(tmp_path):
     # point clouds: CSV and PLY hold the same points, unit normals
     for name in ("outer", "inner"):
         csv = np.loadtxt(out / f"{name}_cloud.csv", delimiter=",", skiprows=1)
-        ply = machining.read_cloud_ply(out / f"{name}_cloud.ply")
-        np.testing.assert_allclose(csv, ply, rtol=0, atol=1e-8)
-        np.testing.assert_allclose(np.linalg.norm(ply[:, 3:], axis=1), 1.0, atol=1e-8)
-        assert len(ply) == man["files"][f"{name}_cloud.ply"]["points"]
+        cloud = ply.read(out / f"{name}_cloud.ply")
+        np.testing.assert_allclose(csv, cloud, rtol=0, atol=1e-8)
+        np.testing.assert_allclose(np.linalg.norm(cloud[:, 3:], axis=1), 1.0, atol=1e-8)
+        assert len(cloud) == man["files"][f"{name}_cloud.ply"]["points"]
     # the cutter: a tool profile and its round trip within the tolerance
     tool = np.loadtxt(out / "inner_cutter.csv", delimiter=",", skiprows=1)
     side = json.loads((out / "inner_cutter.json").read_text())

@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 
 from rotorflow.errors import CaseError
-from rotorflow.geometry.cutter import (
+from rotorflow.geometry.export.cutter import (
     CutterSetup,
     _Turned,
     default_setup,
     form_cutter,
     round_trip,
 )
-from rotorflow.geometry.profile_curves import inner_profile
+from rotorflow.geometry.internal_gear.profiles import inner_profile
 from rotorflow.geometry.summary import build_machine
 from rotorflow.workflow.case import load_case
 

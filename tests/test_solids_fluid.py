@@ -9,10 +9,10 @@ import trimesh
 from manifold3d import CrossSection, FillRule
 
 from rotorflow.errors import CaseError
-from rotorflow.geometry import stl
-from rotorflow.geometry.export import chamber_sum, export
-from rotorflow.geometry.export_settings import Export
-from rotorflow.geometry.pin_space import PinSpace
+from rotorflow.geometry.export import stl
+from rotorflow.geometry.export.driver import chamber_sum, export
+from rotorflow.geometry.export.settings import Export
+from rotorflow.geometry.internal_gear.space import PinSpace
 from rotorflow.geometry.ports import chamber_section, port_timing, ports
 from rotorflow.geometry.summary import build_machine
 from rotorflow.workflow.case import load_case

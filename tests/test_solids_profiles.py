@@ -1,5 +1,5 @@
 """Transverse profiles as analytic curves: sampling to a chordal tolerance, clearance
-offsets, self-intersection checks (geometry/profile_curves.py)."""
+offsets, self-intersection checks (geometry/curves.py, geometry/internal_gear/profiles.py)."""
 
 import math
 
@@ -7,21 +7,21 @@ import numpy as np
 import pytest
 
 from rotorflow.errors import CaseError
-from rotorflow.geometry.pin_gerotor import PinGerotor, cross
-from rotorflow.geometry.pin_space import PinSpace
-from rotorflow.geometry.profile_curves import (
+from rotorflow.geometry.curves import (
     Clearance,
     check_simple,
     closest,
-    inner_profile,
     offset_profile,
-    outer_profile,
     rings_intersections,
     sample,
     sample_polygon,
     self_intersections,
     signed_area,
 )
+from rotorflow.geometry.internal_gear.pair import PinGerotor
+from rotorflow.geometry.internal_gear.profiles import inner_profile, outer_profile
+from rotorflow.geometry.internal_gear.space import PinSpace
+from rotorflow.geometry.planar import cross
 from rotorflow.workflow.case import load_case
 
 from .conftest import CASES

@@ -4,11 +4,11 @@ checked against the analytic volume and flank (geometry/step.py)."""
 import numpy as np
 import pytest
 
-from rotorflow.geometry.export import export
-from rotorflow.geometry.export_settings import Export
-from rotorflow.geometry.profile_curves import inner_profile
-from rotorflow.geometry.solids import SweptSurface
-from rotorflow.geometry.step import check_step, hermite_net, write_rotor_step
+from rotorflow.geometry.export.driver import export
+from rotorflow.geometry.export.settings import Export
+from rotorflow.geometry.export.solids import SweptSurface
+from rotorflow.geometry.export.step import check_step, hermite_net, write_rotor_step
+from rotorflow.geometry.internal_gear.profiles import inner_profile
 from rotorflow.geometry.summary import build_machine
 from rotorflow.workflow.case import load_case
 

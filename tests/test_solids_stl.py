@@ -7,18 +7,18 @@ import numpy as np
 import pytest
 import trimesh
 
-from rotorflow.geometry import stl
-from rotorflow.geometry.export import export
-from rotorflow.geometry.export_settings import Export
-from rotorflow.geometry.pin_space import PinSpace
-from rotorflow.geometry.profile_curves import inner_profile, outer_profile
-from rotorflow.geometry.solids import (
+from rotorflow.geometry.export import stl
+from rotorflow.geometry.export.driver import export
+from rotorflow.geometry.export.settings import Export
+from rotorflow.geometry.export.solids import (
     SweptSurface,
     build_flank,
     foot_points,
     rotor_mesh,
     validate_mesh,
 )
+from rotorflow.geometry.internal_gear.profiles import inner_profile, outer_profile
+from rotorflow.geometry.internal_gear.space import PinSpace
 from rotorflow.geometry.summary import build_machine
 from rotorflow.workflow.case import load_case
 

@@ -55,12 +55,12 @@ CONTACT_STEP_DEG = 0.5
 
 
 def run_geometry(ctx: StageContext) -> dict:
-    from rotorflow.geometry.contacts import contact_table, write_csv
+    from rotorflow.geometry.contacts import write_csv
     from rotorflow.geometry.summary import geometry_figures
 
     figures = geometry_figures(ctx.case, machine_of(ctx))
     write_json(ctx.out / "geometry.json", figures)
-    write_csv(contact_table(ctx.case.pair, CONTACT_STEP_DEG), ctx.out / "contacts.csv")
+    write_csv(ctx.case.pair.contact_table(CONTACT_STEP_DEG), ctx.out / "contacts.csv")
     return {"swept_volume_m3": figures["swept_volume_m3"], "driven": figures["driven"]}
 
 
@@ -104,8 +104,8 @@ def run_render(ctx: StageContext) -> dict:
 
 def run_solids(ctx: StageContext) -> dict:
     """Solids and machining files of the [export] section (as `rotorflow export`)."""
-    from rotorflow.geometry.export import export
-    from rotorflow.geometry.export_settings import Export
+    from rotorflow.geometry.export.driver import export
+    from rotorflow.geometry.export.settings import Export
 
     settings = Export.from_section(ctx.raw["export"], str(ctx.case_path))
     export(ctx.case, settings, ctx.out)

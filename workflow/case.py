@@ -13,20 +13,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from rotorflow.errors import CaseError
-from rotorflow.geometry.pin_gerotor import PinGerotor, sigma_limit
+from rotorflow.geometry.family import RotorPair, family_for, number
 from rotorflow.geometry.sweep import Sweep
 
-MACHINE_KEYS = {
-    "type",
-    "lobes_outer",
-    "lambda",
-    "sigma",
-    "sigma_bar",
-    "diameter_mm",
-    "length_mm",
-    "fillet",
-    "fillet_apex_diameter_mm",
-}
+#: [machine] keys of every family; each family adds its own (geometry.family.Family.keys).
+MACHINE_KEYS = {"type", "length_mm"}
 SWEEP_KEYS = {"kind", "wrap_outer_deg", "wrap_bar", "diameter_end_mm", "lead_ratio"}
 #: [operating] keys the geometry reads; the quasi-1D stage owns the others.
 OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven"}
@@ -40,7 +31,7 @@ SECTIONS = {
 class Case:
     name: str
     path: Path
-    pair: PinGerotor
+    pair: RotorPair
     sweep_kind: str
     length: float
     wrap: float | None  # outer wrap [rad], or None when given as wrap_bar
@@ -55,17 +46,6 @@ class Case:
         """The sweep law; a wrap given as wrap_bar needs the profile's chamber life."""
         wrap = self.wrap if self.wrap is not None else self.wrap_bar * life_2d
         return Sweep(self.sweep_kind, self.length, wrap, self.scale_end, self.lead_ratio)
-
-
-def _number(section: dict, key: str, where: str, *, integer: bool = False):
-    value = section[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise CaseError(f"'{key}' in {where} must be a number, got {value!r}")
-    if integer and not float(value).is_integer():
-        raise CaseError(f"'{key}' in {where} must be an integer, got {value!r}")
-    if not math.isfinite(value):
-        raise CaseError(f"'{key}' in {where} must be finite, got {value!r}")
-    return int(value) if integer else float(value)
 
 
 def _check_keys(section: dict, allowed: set[str], name: str, path: Path):
@@ -95,50 +75,20 @@ def load_case(path: Path) -> Case:
     if "machine" not in data:
         raise CaseError(f"missing section [machine] in {path}")
     m = data["machine"]
-    _check_keys(m, MACHINE_KEYS, "machine", path)
+    if not isinstance(m, dict):
+        raise CaseError(f"[machine] in {path} must be a table")
     where = f"[machine] of {path}"
-    for key in ("type", "lobes_outer", "lambda", "diameter_mm", "length_mm"):
-        if key not in m:
-            raise CaseError(f"missing key '{key}' in {where}")
-    if m["type"] != "internal-gear":
-        raise CaseError(f"unsupported machine type '{m['type']}' in {where} (internal-gear)")
-    n1 = _number(m, "lobes_outer", where, integer=True)
-    if n1 < 2:
-        raise CaseError(f"lobes_outer must be at least 2 in {where}, got {n1}")
-    lam = _number(m, "lambda", where)
-    if not lam > 1.0:
-        raise CaseError(f"lambda must be greater than 1 in {where}, got {lam}")
-    diameter = _number(m, "diameter_mm", where) * 1e-3
-    length = _number(m, "length_mm", where) * 1e-3
-    if not diameter > 0.0:
-        raise CaseError(f"diameter_mm must be positive in {where}")
+    if "type" not in m:
+        raise CaseError(f"missing key 'type' in {where}")
+    family = family_for(m["type"], where)
+    _check_keys(m, MACHINE_KEYS | family.keys, "machine", path)
+    if "length_mm" not in m:
+        raise CaseError(f"missing key 'length_mm' in {where}")
+    length = number(m, "length_mm", where) * 1e-3
     if not length > 0.0:
         raise CaseError(f"length_mm must be positive in {where}")
-    if ("sigma" in m) == ("sigma_bar" in m):
-        raise CaseError(f"give exactly one of 'sigma' or 'sigma_bar' in {where}")
-    lim = sigma_limit(n1, lam)
-    if "sigma" in m:
-        sigma = _number(m, "sigma", where)
-    else:
-        sigma_bar = _number(m, "sigma_bar", where)
-        if not 0.0 < sigma_bar <= 1.0:
-            raise CaseError(f"sigma_bar must lie in (0, 1] in {where}, got {sigma_bar}")
-        sigma = sigma_bar * lim
-    if not sigma > 0.0:
-        raise CaseError(f"sigma must be positive in {where}, got {sigma}")
-    if sigma > lim * (1.0 + 1e-9):
-        raise CaseError(
-            f"sigma = {sigma:.6g} is above the undercut limit sigma_lim = {lim:.6g} in {where}"
-        )
-    fillet = m.get("fillet", "conjugate")
-    if fillet not in ("conjugate", "arc"):
-        raise CaseError(f"fillet must be 'conjugate' or 'arc' in {where}, got {fillet!r}")
-    apex = None
-    if "fillet_apex_diameter_mm" in m:
-        if fillet != "arc":
-            raise CaseError(f"fillet_apex_diameter_mm needs fillet = 'arc' in {where}")
-        apex = _number(m, "fillet_apex_diameter_mm", where) * 1e-3
-    pair = PinGerotor(n1, lam, min(sigma, lim), diameter, fillet, apex)
+    pair = family.from_section({k: v for k, v in m.items() if k in family.keys}, where)
+    diameter = pair.diameter
 
     s = data.get("sweep", {"kind": "straight"})
     _check_keys(s, SWEEP_KEYS, "sweep", path)
@@ -155,21 +105,21 @@ def load_case(path: Path) -> Case:
         if ("wrap_outer_deg" in s) == ("wrap_bar" in s):
             raise CaseError(f"give exactly one of 'wrap_outer_deg' or 'wrap_bar' in {where}")
         if "wrap_outer_deg" in s:
-            wrap = math.radians(_number(s, "wrap_outer_deg", where))
+            wrap = math.radians(number(s, "wrap_outer_deg", where))
             if wrap < 0.0:
                 raise CaseError(f"wrap_outer_deg must not be negative in {where}")
         else:
-            wrap_bar = _number(s, "wrap_bar", where)
+            wrap_bar = number(s, "wrap_bar", where)
             if wrap_bar < 0.0:
                 raise CaseError(f"wrap_bar must not be negative in {where}")
     scale_end, lead_ratio = 1.0, 1.0
     if kind == "conical":
         if "diameter_end_mm" not in s:
             raise CaseError(f"missing key 'diameter_end_mm' in {where} (conical sweep)")
-        scale_end = _number(s, "diameter_end_mm", where) * 1e-3 / diameter
+        scale_end = number(s, "diameter_end_mm", where) * 1e-3 / diameter
         if not 0.0 < scale_end <= 1.0:
             raise CaseError(f"diameter_end_mm must lie in (0, diameter_mm] in {where}")
-        lead_ratio = _number(s, "lead_ratio", where) if "lead_ratio" in s else 1.0
+        lead_ratio = number(s, "lead_ratio", where) if "lead_ratio" in s else 1.0
         if not lead_ratio > 0.0:
             raise CaseError(f"lead_ratio must be positive in {where}")
     elif "diameter_end_mm" in s or "lead_ratio" in s:
@@ -179,7 +129,7 @@ def load_case(path: Path) -> Case:
     if not isinstance(op, dict):
         raise CaseError(f"[operating] in {path} must be a table")
     where = f"[operating] of {path}"
-    volume_ratio = _number(op, "volume_ratio", where) if "volume_ratio" in op else 2.0
+    volume_ratio = number(op, "volume_ratio", where) if "volume_ratio" in op else 2.0
     if not volume_ratio > 1.0:
         raise CaseError(f"volume_ratio must be greater than 1 in {where}, got {volume_ratio}")
     driven = op.get("driven", "auto")
@@ -202,7 +152,7 @@ def load_case(path: Path) -> Case:
     )
 
 
-def validate_stage_sections(data: dict, path: Path, pair: PinGerotor | None = None) -> None:
+def validate_stage_sections(data: dict, path: Path, pair: RotorPair | None = None) -> None:
     """Hand the sections of later stages to their owners' validators (``pair``: the
     case's rotors, for the sections cut from them).
 
@@ -230,7 +180,7 @@ def validate_stage_sections(data: dict, path: Path, pair: PinGerotor | None = No
         allowed = OPERATING_GEOMETRY_KEYS if name == "operating" else set()
         _check_keys(section, allowed, name, path)
     if "export" in data:  # owned by the solids stage
-        from rotorflow.geometry.export_settings import Export
+        from rotorflow.geometry.export.settings import Export
 
         Export.from_section(data["export"], str(path))
     if "cfd" in data:  # owned by the CFD leakage stage

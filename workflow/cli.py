@@ -67,7 +67,7 @@ def cmd_table(args) -> int:
 
 def cmd_contacts(args) -> int:
     from rotorflow.errors import CaseError
-    from rotorflow.geometry.contacts import contact_table, write_csv
+    from rotorflow.geometry.contacts import write_csv
     from rotorflow.workflow.case import load_case
 
     if not args.step_deg > 0.0:
@@ -75,7 +75,7 @@ def cmd_contacts(args) -> int:
     case = load_case(args.case)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    print(write_csv(contact_table(case.pair, args.step_deg), out))
+    print(write_csv(case.pair.contact_table(args.step_deg), out))
     return 0
 
 
@@ -170,8 +170,8 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_export(args) -> int:
-    from rotorflow.geometry.export import export
-    from rotorflow.geometry.export_settings import Export
+    from rotorflow.geometry.export.driver import export
+    from rotorflow.geometry.export.settings import Export
     from rotorflow.workflow.case import load_case
 
     case = load_case(args.case)

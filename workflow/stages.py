@@ -283,7 +283,7 @@ register(Stage(
     reads=("cfd", "machine", "sweep", "operating.speed_rpm", "operating.driven",
            "operating.volume_ratio"),
     code=("rotorflow.cases", "rotorflow.postprocess.leakage", "rotorflow.quasi1d.flows",
-          "rotorflow.geometry.sealing_gap", "rotorflow.geometry.profile_curves"),
+          "rotorflow.geometry.internal_gear", "rotorflow.geometry.curves"),
     report="rotorflow.postprocess.leakage:report_section",
     report_rank=60,
     missing=_has_cfd,

@@ -22,7 +22,7 @@ import tempfile
 from pathlib import Path
 
 from rotorflow.cases.gap_study import LEVELS, RotorMachine, SectionPoint, run_leakage_matrix
-from rotorflow.geometry.pin_gerotor import PinGerotor, sigma_limit
+from rotorflow.geometry.internal_gear.pair import PinGerotor, sigma_limit
 
 HERE = Path(__file__).resolve().parent
 

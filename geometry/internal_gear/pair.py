@@ -32,24 +32,8 @@ from scipy.optimize import brentq, minimize_scalar
 
 from rotorflow.errors import CaseError
 
-TWO_PI = 2.0 * math.pi
-
-
-def rot(angle):
-    """Rotation matrices for an angle or an array of angles, shape (..., 2, 2)."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
-
-
-def rotate(points, angle):
-    """Rotate points (..., 2) counter-clockwise by ``angle`` (scalar or broadcastable)."""
-    c, s = np.cos(angle), np.sin(angle)
-    x, y = points[..., 0], points[..., 1]
-    return np.stack([c * x - s * y, s * x + c * y], -1)
-
-
-def cross(u, v):
-    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+from ..family import Rotor, RotorPair
+from ..planar import TWO_PI, cross, rotate
 
 
 def sigma_limit(lobes_outer: int, lam: float, samples: int = 20001) -> float:
@@ -98,9 +82,19 @@ def pressure_angle_at_pitch(lam: float, sigma: float) -> float | None:
     return math.acos(c) - math.pi / 2.0
 
 
+#: Default radius of the casing bore (the outer rotor's outside) per outer diameter D / 2.
+BORE_FACTOR = 1.25
+
+
 @dataclass(frozen=True)
-class PinGerotor:
-    """A conjugate pin-generated internal gear pair of maximum outer diameter ``diameter``."""
+class PinGerotor(RotorPair):
+    """A conjugate pin-generated internal gear pair of maximum outer diameter ``diameter``.
+
+    The internal-gear family's :class:`~..family.RotorPair`: rotor 0 (the reference) is
+    the outer rotor, rotor 1 the inner; the interface methods are at the end.
+    """
+
+    family = "internal-gear"
 
     lobes_outer: int
     lam: float
@@ -336,3 +330,88 @@ class PinGerotor:
                 f"the arc fillet infringes the conjugate fillet by {worst * 1e6:.3g} um: "
                 "raise fillet_apex_diameter_mm"
             )
+
+    # ---------------------------------------------------------------- the family seam
+    @cached_property
+    def space(self):
+        """The tooth space's region geometry (fits built once per pair)."""
+        from .space import PinSpace
+
+        return PinSpace(self)
+
+    @cached_property
+    def rotors(self) -> tuple[Rotor, Rotor]:
+        from .profiles import inner_profile, outer_profile
+
+        return (Rotor("outer", outer_profile(self), (0.0, 0.0), self.lobes_outer, 1.0, self.r1),
+                Rotor("inner", inner_profile(self), (0.0, self.E), self.lobes_inner, self.m21,
+                      self.lobes_inner * self.E))
+
+    @property
+    def split_phase(self) -> float:
+        if self.fillet_kind != "conjugate":
+            return 0.0
+        t_lo, t_hi = self.space.fillet_time_range
+        return t_hi - t_lo
+
+    def section(self, points_per_period: int):
+        from .section import section_chamber
+
+        return section_chamber(self, points_per_period)
+
+    def chamber_polygons(self, phi: float, contacts: list | None = None):
+        from .chambers import chamber_polygons
+
+        return chamber_polygons(self, phi, contacts)
+
+    @property
+    def working_area(self) -> float:
+        """The fluid region inside the outer rotor: its chambers plus the inner rotor."""
+        return self.rotors[0].profile.area
+
+    def casing_bores(self, bore_radius: float | None = None):
+        """The bore the outer rotor turns in (its outside), about O1."""
+        r = 0.5 * BORE_FACTOR * self.diameter if bore_radius is None else bore_radius
+        return (((0.0, 0.0), r),)
+
+    def gap_walls(self, angle: float, gap: float, **options):
+        from .sealing_gap import sealing_gap_walls
+
+        return sealing_gap_walls(self, angle, gap, **options)
+
+    def wall_speeds(self, angle: float, omega_reference: float) -> tuple[float, float]:
+        from .sealing_gap import sealing_wall_speeds
+
+        return sealing_wall_speeds(self, angle, omega_reference)
+
+    def figures(self) -> dict:
+        """Seed 000's design figures of the pair (Eqs. 1, 4, 5)."""
+        alpha = self.pressure_angle
+        d = self.diameter
+        return {
+            "lobes_outer": self.lobes_outer,
+            "lobes_inner": self.lobes_inner,
+            "m21": self.m21,
+            "lambda": self.lam,
+            "sigma": self.sigma,
+            "sigma_lim": self.sigma_lim,
+            "sigma_bar": self.sigma / self.sigma_lim,
+            "E_over_D": self.E / d,
+            "a_over_D": self.a / d,
+            "rho_over_D": self.rho / d,
+            "pressure_angle_deg": None if alpha is None else math.degrees(alpha),
+            "pitch_point_contact": alpha is not None,
+        }
+
+    def contact_table(self, step_deg: float = 1.0, span_deg: float | None = None):
+        from .contacts import contact_table
+
+        return contact_table(self, step_deg, span_deg)
+
+    def digest(self) -> str:
+        """A short digest of the pair's defining numbers (CFD run folders)."""
+        import hashlib
+
+        text = repr((self.lobes_outer, self.lam, self.sigma, self.diameter, self.fillet_kind,
+                     self.fillet_apex_diameter))
+        return hashlib.sha256(text.encode()).hexdigest()[:8]

@@ -35,7 +35,7 @@ from scipy.interpolate import CubicSpline
 
 from rotorflow.errors import CaseError
 
-from .profile_curves import closest, sample
+from ..curves import closest, sample
 
 #: Samples of the bracket scan of the contact equations, and bisection steps after it
 #: (2^-60 of the bracket: machine precision).
@@ -318,13 +318,17 @@ def interference(prof, setup: CutterSetup, axial, radius, n_psi: int = 121) -> f
     return float(dist.max())
 
 
-def default_setup(pair, sweep, angle: float | None, centre: float | None) -> CutterSetup:
-    """The cutter of a helical (or straight) inner rotor; conical rotors have none."""
+def default_setup(pair, sweep, angle: float | None, centre: float | None,
+                  rotor: str | None = None) -> CutterSetup:
+    """The cutter of a helical (or straight) externally toothed rotor (by default the
+    pair's last, the internal gear's inner rotor); conical rotors have none.  The tool
+    sits at the pair's diameter from the rotor axis unless ``centre`` is given."""
     if sweep.kind == "conical" or abs(sweep.lead_ratio - 1.0) > 1e-12:
         raise CaseError("a form cutter needs a rotor of constant section and lead "
                         "(straight or helical sweep); this rotor is conical")
-    k = pair.m21 * sweep.wrap / sweep.length
-    r_pitch = pair.lobes_inner * pair.E
+    cut = pair.rotors[-1] if rotor is None else pair.rotor(rotor)
+    k = cut.speed_ratio * sweep.wrap / sweep.length
+    r_pitch = cut.pitch_radius
     if angle is None:
         angle = math.atan(k * r_pitch)
     return CutterSetup(angle, pair.diameter if centre is None else centre, k)

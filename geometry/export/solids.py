@@ -37,8 +37,8 @@ from functools import cached_property
 
 import numpy as np
 
-from .profile_curves import OffsetProfile, Profile, check_simple, sample
-from .sweep import Sweep
+from ..curves import OffsetProfile, PieceCurve, check_simple, sample
+from ..sweep import Sweep
 
 log = logging.getLogger(__name__)
 
@@ -71,14 +71,14 @@ def _apply(c, s, v):
 class SweptSurface:
     """One rotor flank placed in the machine (fixed) frame; lengths in metres."""
 
-    curve: Profile | OffsetProfile
+    curve: PieceCurve | OffsetProfile
     sweep: Sweep
     theta0: float  # rotor turn at z = 0
     omega: float  # rotor twist per outer-rotor twist (1 outer, m21 inner)
     centre: tuple[float, float]  # rotor axis at z = 0 (scaled with s along z)
 
     @property
-    def base(self) -> Profile:
+    def base(self) -> PieceCurve:
         return self.curve.base if isinstance(self.curve, OffsetProfile) else self.curve
 
     @property

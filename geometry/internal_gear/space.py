@@ -23,7 +23,8 @@ import numpy as np
 from numpy.polynomial import chebyshev as C
 from scipy.interpolate import CubicSpline
 
-from .pin_gerotor import TWO_PI, PinGerotor, cross, rotate
+from ..planar import TWO_PI, cross, rotate
+from .pair import PinGerotor
 
 #: Starting samples per inner lobe for the Fourier antiderivative, the cap, and the
 #: relative size of the Fourier tail accepted as converged (analytic integrand: the

@@ -22,8 +22,8 @@ from functools import cached_property
 import numpy as np
 from numpy.polynomial import chebyshev as C
 
-from .pin_gerotor import TWO_PI, cross, rotate
-from .pin_space import PinSpace
+from ..planar import TWO_PI, cross, rotate
+from .space import PinSpace
 
 #: Newton steps after inverse interpolation on the bracket table (quadratic convergence
 #: from a start ~1e-7 off: two reach machine precision, the third is a margin).

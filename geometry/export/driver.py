@@ -18,7 +18,7 @@ done, and the figures of the checks go into ``export.json`` beside the files:
   the sum of the chamber table's volumes at that angle plus the clearance's volume.
 * STEP (outer.step, inner.step): one solid per rotor, re-imported and checked.
 * Profiles (CSV, DXF), point clouds (CSV, PLY), the inner rotor's form cutter (CSV and
-  a JSON side-car), see :mod:`.machining` and :mod:`.cutter`.
+  a JSON side-car), see :mod:`.csvfile`, :mod:`.dxf`, :mod:`.ply` and :mod:`.cutter`.
 
 All lengths in files are in ``units`` (mm by default); export.json is SI.
 """
@@ -36,18 +36,12 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from . import machining, stl
-from .export_settings import Export
-from .machine import InternalGearMachine
-from .profile_curves import (
-    Clearance,
-    check_simple,
-    inner_profile,
-    offset_profile,
-    outer_profile,
-    region_volume,
-    sample_polygon,
-)
+from ..curves import Clearance, check_simple, offset_profile, region_volume, sample_polygon
+from ..machine import SweptMachine
+from ..summary import build_machine
+from . import csvfile, dxf, ply, stl
+from .cloud import cloud
+from .settings import Export
 from .solids import (
     SweptSurface,
     TriMesh,
@@ -58,12 +52,9 @@ from .solids import (
     rotor_mesh,
     validate_mesh,
 )
-from .summary import build_machine
 
 log = logging.getLogger(__name__)
 
-#: Default outside diameter of the outer rotor (casing bore) per outer diameter D.
-BORE_FACTOR = 1.25
 #: Default depth of the port pockets per outer diameter D.
 PORT_DEPTH_FACTOR = 0.1
 #: Share of the narrowest normal gap each fluid flank may deviate: two flanks each
@@ -77,7 +68,7 @@ VOLUME_RTOL = 1e-4
 class Assembly:
     """Both rotors' flanks placed in the machine frame at the export angle."""
 
-    machine: InternalGearMachine
+    machine: SweptMachine
     settings: Export
     outer: SweptSurface
     inner: SweptSurface
@@ -97,12 +88,19 @@ class Assembly:
                 "fluid_core_m3": v_out - v_in}
 
 
-def assemble(case, settings: Export, machine: InternalGearMachine | None = None) -> Assembly:
-    """Profiles with the clearance applied and checked, placed at the export angle."""
+def assemble(case, settings: Export, machine: SweptMachine | None = None) -> Assembly:
+    """Profiles with the clearance applied and checked, placed at the export angle.
+
+    Written for a pair whose first rotor encloses the second (material outside, as the
+    internal gear's outer rotor): ``outer`` and ``inner`` are those two rotors."""
     m = machine or build_machine(case)
     pair, sweep = m.pair, m.sweep
+    ring, core = pair.rotors[0], pair.rotors[1]
+    if ring.material_inside or not core.material_inside:
+        raise CaseError(f"solids of a {pair.family} pair are not written yet: the export "
+                        "needs a first rotor that encloses the second")
     clearance = Clearance(settings.clearance_m)
-    outer, inner = outer_profile(pair), inner_profile(pair)
+    outer, inner = ring.profile, core.profile
     if settings.clearance_on == "outer":
         outer = offset_profile(outer, clearance, +1)
     else:
@@ -110,8 +108,8 @@ def assemble(case, settings: Export, machine: InternalGearMachine | None = None)
     tol = settings.tolerance_m
     for curve in (outer, inner):
         check_simple(sample_polygon(curve, tol), f"{curve.name} rotor profile")
-    bore = (0.5 * settings.bore_diameter_m if settings.bore_diameter_m is not None
-            else 0.5 * BORE_FACTOR * pair.diameter)
+    bore = pair.casing_bores(None if settings.bore_diameter_m is None
+                             else 0.5 * settings.bore_diameter_m)[0][1]
     if bore <= outer.radius_max + tol:
         raise CaseError(f"bore_diameter_mm = {2e3 * bore:g} must exceed the outer rotor's "
                         f"profile diameter {2e3 * outer.radius_max:.4f} mm")
@@ -125,8 +123,8 @@ def assemble(case, settings: Export, machine: InternalGearMachine | None = None)
     return Assembly(
         machine=m,
         settings=settings,
-        outer=SweptSurface(outer, sweep, phi, 1.0, (0.0, 0.0)),
-        inner=SweptSurface(inner, sweep, pair.m21 * phi, pair.m21, (0.0, pair.E)),
+        outer=SweptSurface(outer, sweep, ring.speed_ratio * phi, ring.speed_ratio, ring.axis),
+        inner=SweptSurface(inner, sweep, core.speed_ratio * phi, core.speed_ratio, core.axis),
         bore_radius=bore,
         volume_ratio=float(getattr(case, "volume_ratio", 2.0)),
         suction_close=angle("suction_close_deg"),
@@ -144,9 +142,9 @@ def _check_volume(name: str, volume: float, analytic: float) -> None:
                            f"{analytic:.9g} m^3 by {_rel(volume, analytic):.2e}")
 
 
-def chamber_sum(machine: InternalGearMachine, phi: float) -> float:
-    """Sum of the volumes of all chambers present at outer angle phi (chamber table)."""
-    period = 2.0 * math.pi / machine.pair.lobes_outer
+def chamber_sum(machine: SweptMachine, phi: float) -> float:
+    """Sum of the volumes of all chambers present at reference angle phi (chamber table)."""
+    period = machine.pair.period
     cur = machine.curves
     k0 = math.floor((cur.phi[0] - phi) / period) - 1
     k1 = math.ceil((cur.phi[-1] - phi) / period) + 1
@@ -165,6 +163,7 @@ def export(case, settings: Export, out: Path) -> dict:
                         "chambers touch along the sealing lines and it is not a solid")
     asm = assemble(case, settings)
     pair, sweep = asm.machine.pair, asm.machine.sweep
+    inner_axis = [float(c) for c in asm.inner.centre]
     if settings.wants("cutter"):  # fail before building anything else
         from .cutter import default_setup
 
@@ -187,8 +186,9 @@ def export(case, settings: Export, out: Path) -> dict:
         "clearance_on": settings.clearance_on,
         "fluid_angle_rad": settings.fluid_angle_rad,
         "bore_radius_m": asm.bore_radius,
-        "inner_axis_m": [[0.0, pair.E, 0.0],
-                         [0.0, pair.E * float(sweep.scale(sweep.length)), sweep.length]],
+        "inner_axis_m": [[*inner_axis, 0.0],
+                         [*(float(sweep.scale(sweep.length)) * c for c in inner_axis),
+                          sweep.length]],
         "analytic_volumes_m3": analytic,
         "files": files,
         "timing_s": timing,
@@ -233,21 +233,21 @@ def export(case, settings: Export, out: Path) -> dict:
                                   ("inner", asm.inner.curve, None)):
             poly = sample_polygon(curve, tol)
             if settings.wants("csv"):
-                machining.write_profile_csv(out / f"{name}_profile.csv", poly, unit, scale)
+                csvfile.write_profile_csv(out / f"{name}_profile.csv", poly, unit, scale)
                 files[f"{name}_profile.csv"] = {"vertices": len(poly), "closed": True}
             if settings.wants("dxf"):
-                machining.write_profile_dxf(out / f"{name}_profile.dxf", poly, scale, unit, bore)
+                dxf.write(out / f"{name}_profile.dxf", poly, scale, unit, bore)
                 files[f"{name}_profile.dxf"] = {"vertices": len(poly), "closed": True}
 
     if settings.wants("csv") or settings.wants("ply"):
         t0 = time.perf_counter()
         for name, surf, inside in (("outer", asm.outer, False), ("inner", asm.inner, True)):
-            pts, nrm = machining.cloud(surf, settings.cloud_spacing_m, inside)
+            pts, nrm = cloud(surf, settings.cloud_spacing_m, inside)
             if settings.wants("csv"):
-                machining.write_cloud_csv(out / f"{name}_cloud.csv", pts, nrm, unit, scale)
+                csvfile.write_cloud_csv(out / f"{name}_cloud.csv", pts, nrm, unit, scale)
                 files[f"{name}_cloud.csv"] = {"points": len(pts)}
             if settings.wants("ply"):
-                machining.write_cloud_ply(out / f"{name}_cloud.ply", pts, nrm, scale,
+                ply.write(out / f"{name}_cloud.ply", pts, nrm, scale,
                                           f"rotorflow {name} rotor flank, {unit}")
                 files[f"{name}_cloud.ply"] = {"points": len(pts)}
         timing["clouds_s"] = time.perf_counter() - t0
@@ -288,7 +288,7 @@ def _write_stl(path: Path, mesh: TriMesh, scale: float, analytic: float,
 def _fluid(path: Path, asm: Assembly, go, gi, dev_o: dict, dev_i: dict, scale: float) -> dict:
     import manifold3d
 
-    from .ports import port_timing, ports
+    from ..ports import port_timing, ports
 
     gap = min(asm.settings.clearance_m) * min(min_horizontal_normal(asm.outer),
                                               min_horizontal_normal(asm.inner))

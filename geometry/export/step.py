@@ -30,7 +30,7 @@ import numpy as np
 
 from rotorflow.errors import ExternalRunError
 
-from .profile_curves import sample
+from ..curves import sample
 from .solids import SweptSurface, foot_points
 
 log = logging.getLogger(__name__)
@@ -204,7 +204,7 @@ def _flank_faces(gmsh, surface: SweptSurface, tol: float):
 def write_rotor_step(path: Path, surface: SweptSurface, tol: float,
                      bore_radius: float | None, log_dir: Path | None = None) -> None:
     """Build the rotor in OCC and write it to ``path`` (STEP, mm)."""
-    from rotorflow.cases.gmsh_session import gmsh_session
+    from rotorflow.gmsh_session import gmsh_session
 
     L = surface.length
     with gmsh_session(Path(path).stem, log_dir=log_dir) as gmsh:
@@ -237,7 +237,7 @@ def write_rotor_step(path: Path, surface: SweptSurface, tol: float,
 def check_step(path: Path, surface: SweptSurface | None = None, tol: float | None = None,
                log_dir: Path | None = None) -> StepCheck:
     """Re-import a STEP file and check it (see the module docstring)."""
-    from rotorflow.cases.gmsh_session import gmsh_session
+    from rotorflow.gmsh_session import gmsh_session
 
     with gmsh_session(Path(path).stem + "_check", log_dir=log_dir) as gmsh:
         occ = gmsh.model.occ

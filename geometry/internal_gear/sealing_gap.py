@@ -34,9 +34,11 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from .pin_gerotor import TWO_PI, PinGerotor, rotate
-from .pin_space import PinSpace
-from .profile_curves import Clearance, inner_profile, offset_profile, outer_profile
+from ..curves import Clearance, offset_profile
+from ..planar import TWO_PI, rotate
+from .pair import PinGerotor
+from .profiles import inner_profile, outer_profile
+from .space import PinSpace
 
 #: Parameter span searched on each side of the contact on the inner profile, in lobes
 #: (u of :func:`.profile_curves.inner_profile`): half a lobe, so both ways reach past

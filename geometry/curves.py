@@ -1,20 +1,12 @@
-"""The two transverse profiles as closed analytic curves: evaluation, sampling to a
+"""Rotor profiles as closed analytic curves: evaluation, sampling to a
 chordal tolerance, clearance offsets, closest points and a self-intersection check.
 
 A profile is a chain of analytic pieces traversed counter-clockwise; a global parameter
 ``u`` in ``[0, n_pieces)`` runs along it, piece ``floor(u)`` at local ``t = u - floor(u)``.
 
-* outer rotor (frame S1, origin O1): per lobe k, pin k as a circle arc (pin angle from
-  ``+pin_edge`` to ``-pin_edge``), then fillet k (conjugate: generation angle from
-  ``g_hi`` to ``g_lo``; arc: the circle of :attr:`PinGerotor.arc_fillet`), both turned
-  by ``2 pi k / N1``.  The region inside is fluid; outer-rotor material is outside.
-* inner rotor (frame S2, origin O2): per lobe k, ``psi2(g)`` for g from ``-2 pi k`` to
-  ``-2 pi (k + 1)`` (``psi2`` runs clockwise as g grows).  The region inside is material.
-
-Every point is computed from the closed forms of :mod:`.pin_gerotor`, so samples can be
-placed to any chordal tolerance and distances measured to the true curve.  Pieces join
-with continuous tangents (the conjugate fillet meets its pins tangentially; the inner
-profile is analytic, with a G1 point of infinite curvature at sigma_bar = 1).
+Every family's profiles are such chains (:class:`PieceCurve`, e.g. the pin-generated
+pair's in :mod:`.internal_gear.profiles`); what follows works on any of them, and on
+any object with the same methods.
 
 A clearance is a true normal offset ``q(u) = p(u) + d c(u) n(u)`` (``n`` the outward
 unit normal, ``d = +1`` grows the region, ``-1`` shrinks it) with ``c`` uniform or a
@@ -25,7 +17,7 @@ everywhere (no fold) and the offset polygon is simple.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -33,16 +25,8 @@ from scipy.interpolate import CubicSpline
 
 from rotorflow.errors import CaseError
 
-from .pin_gerotor import TWO_PI, PinGerotor, cross, rotate
-from .pin_space import PinSpace
+from .planar import cross
 
-#: Relative step of the central differences used for fillet tangents and curvatures;
-#: the fillet is analytic, so 1e-6 of the parameter span leaves ~1e-10 relative error.
-FD_STEP = 1e-6
-#: Nodes of the cubic Hermite table of the conjugate fillet (exact values and slopes at
-#: the nodes): the fillet is analytic in g, so the table's error is ~1e-15 m (tested),
-#: and it evaluates ~20x faster than the closed form, which matters for foot points.
-FILLET_NODES = 4097
 #: Pre-grid per piece on which curvature is tabulated to place samples.
 PREGRID = 513
 #: Gauss-Legendre nodes per sub-interval and sub-intervals per piece for arc-length
@@ -52,92 +36,36 @@ GAUSS_PANELS = 32
 #: Bisection rounds after equidistribution before sampling gives up (2^-40 of a piece).
 MAX_REFINE = 40
 
-CODE_CIRCLE, CODE_INNER, CODE_FILLET = 0, 1, 2
 
 
-@dataclass(frozen=True)
-class Profile:
-    """A closed counter-clockwise chain of analytic pieces (lengths in metres)."""
+class PieceCurve:
+    """A closed counter-clockwise chain of analytic pieces (lengths in metres).
+
+    Families subclass it with ``_eval(u, order)`` (the point, order 0, or d/du, order 1,
+    at global parameters u) and the attributes ``name``, ``n`` (pieces), ``lobes`` and
+    ``material_inside``; everything else here (normals, curvature, arc length, the
+    enclosed area, lobe fractions) follows from ``_eval``.
+    """
 
     name: str
-    pair: PinGerotor = field(repr=False)
-    kind: np.ndarray = field(repr=False)  # (n,) CODE_*
-    p0: np.ndarray = field(repr=False)  # native parameter at the piece start
-    p1: np.ndarray = field(repr=False)  # ... and end
-    rot: np.ndarray = field(repr=False)  # turn applied to the piece (fillets of lobe k)
-    centre: np.ndarray = field(repr=False)  # (n, 2) circle centres (circle pieces)
-    radius: np.ndarray = field(repr=False)  # circle radii (circle pieces)
-    lobes: int = 1
-    material_inside: bool = False
+    lobes: int
+    material_inside: bool
 
     @property
     def n(self) -> int:
-        return len(self.kind)
+        raise NotImplementedError
 
-    # -------------------------------------------------------------- evaluation
+    def _eval(self, u, order: int):
+        raise NotImplementedError
+
     def _split(self, u):
         u = np.mod(np.asarray(u, dtype=float), self.n)
         j = np.minimum(np.floor(u).astype(int), self.n - 1)
         return j, u - j
 
-    def _eval(self, u, order: int):
-        """Point (order 0) or d/du (order 1) at global parameter(s) u."""
-        j, t = self._split(u)
-        out = np.empty(t.shape + (2,))
-        span = self.p1[j] - self.p0[j]
-        par = self.p0[j] + t * span
-        k = self.kind[j]
-        m = k == CODE_CIRCLE
-        if m.any():
-            a, r, c = par[m], self.radius[j[m]], self.centre[j[m]]
-            if order == 0:
-                out[m] = c + r[:, None] * np.stack([np.cos(a), np.sin(a)], -1)
-            else:
-                out[m] = (r * span[m])[:, None] * np.stack([-np.sin(a), np.cos(a)], -1)
-        m = k == CODE_INNER
-        if m.any():
-            g = par[m]
-            if order == 0:
-                out[m] = self.pair.inner_point(g)
-            else:
-                out[m] = self.pair.inner_derivative(g) * span[m][:, None]
-        m = k == CODE_FILLET
-        if m.any():
-            g, rr = par[m], self.rot[j[m]]
-            if order == 0:
-                out[m] = rotate(self._fillet_hermite(g, 0), rr)
-            else:
-                out[m] = rotate(self._fillet_hermite(g, 1), rr) * span[m][:, None]
-        return out
-
-    @cached_property
-    def _fillet_table(self):
-        g_lo, g_hi = self.pair.fillet_range
-        g = np.linspace(g_lo, g_hi, FILLET_NODES)
-        h = FD_STEP * (g_hi - g_lo)
-        f = self.pair.fillet(g)[1]
-        df = (self.pair.fillet(g + h)[1] - self.pair.fillet(g - h)[1]) / (2.0 * h)
-        return g_lo, (g_hi - g_lo) / (FILLET_NODES - 1), f, df
-
-    def _fillet_hermite(self, g, order: int):
-        """Fillet 0 point (order 0) or d/dg (order 1) from the cubic Hermite table."""
-        return self._hermite(self._fillet_table, g, order)
-
-    @staticmethod
-    def _hermite(table, g, order: int):
-        g0, dg, f, df = table
-        x = (np.asarray(g, dtype=float) - g0) / dg
-        i = np.clip(np.floor(x).astype(int), 0, len(f) - 2)
-        t = (x - i)[:, None]
-        p0, p1 = f[i], f[i + 1]
-        m0, m1 = df[i] * dg, df[i + 1] * dg
-        if order == 0:
-            t2, t3 = t * t, t * t * t
-            return ((2 * t3 - 3 * t2 + 1) * p0 + (t3 - 2 * t2 + t) * m0
-                    + (-2 * t3 + 3 * t2) * p1 + (t3 - t2) * m1)
-        t2 = t * t
-        return ((6 * t2 - 6 * t) * p0 + (3 * t2 - 4 * t + 1) * m0
-                + (-6 * t2 + 6 * t) * p1 + (3 * t2 - 2 * t) * m1) / dg
+    def _lobe_start(self, ut, st) -> float:
+        """Arc length from u = 0 to lobe 0's reference point (see lobe_fraction)."""
+        return 0.0
 
     def point(self, u):
         return self._eval(u, 0)
@@ -200,72 +128,25 @@ class Profile:
     def lobe_fraction(self, u):
         """Fraction of the lobe (by arc length) from the lobe's reference point, [0, 1).
 
-        Reference: the centre of pin k (outer) or the root of lobe k, g = -2 pi k (inner).
+        The reference point is the family's (:meth:`_lobe_start`); u = 0 by default.
         """
         ut, st = self._arc_table
-        per = self.n // self.lobes
         s = np.interp(np.mod(np.asarray(u, dtype=float), self.n), ut, st)
         lobe_len = st[-1] / self.lobes
-        start = 0.5 * np.interp(1.0, ut, st) if self.kind[0] == CODE_CIRCLE and per == 2 else 0.0
-        return np.mod((s - start) / lobe_len, 1.0)
+        return np.mod((s - self._lobe_start(ut, st)) / lobe_len, 1.0)
 
-    # -------------------------------------------------------------- area (exact)
+    # -------------------------------------------------------------- area
     @cached_property
     def area(self) -> float:
-        """Enclosed area from the PinSpace closed forms (not from any sampling)."""
-        space = PinSpace(self.pair)
-        if self.material_inside:
-            return -space.inner_lobe_integral * self.pair.lobes_inner
-        e = self.pair.pin_edge
-        lobe = space.pin_arc_integral(0, e, -e) + space.fillet_full_integral
-        return self.pair.lobes_outer * lobe
+        """Enclosed area, 1/2 of the integral of p x p' (Green's theorem, Gauss panels).
+
+        Families with closed forms override it."""
+        return 0.5 * self.integrate(lambda u: cross(self.point(u), self.derivative(u)))
 
     @cached_property
     def radius_max(self) -> float:
         ut, _ = self._arc_table
         return float(np.linalg.norm(self.point(ut), axis=-1).max())
-
-
-def outer_profile(pair: PinGerotor) -> Profile:
-    n1 = pair.lobes_outer
-    e = pair.pin_edge
-    kind, p0, p1, rot, cen, rad = [], [], [], [], [], []
-    for k in range(n1):
-        turn = TWO_PI * k / n1
-        c = pair.pin_centre(k)
-        base = math.atan2(-c[1], -c[0])  # the pin's inward direction
-        kind.append(CODE_CIRCLE)
-        p0.append(base + e)
-        p1.append(base - e)
-        rot.append(0.0)
-        cen.append(c)
-        rad.append(pair.rho)
-        if pair.fillet_kind == "arc":
-            fc, fr, a0, a1 = pair.arc_fillet
-            kind.append(CODE_CIRCLE)
-            p0.append(a0 + turn)
-            p1.append(a1 + turn)
-            rot.append(0.0)
-            cen.append(rotate(np.asarray(fc), turn))
-            rad.append(fr)
-        else:
-            g_lo, g_hi = pair.fillet_range
-            kind.append(CODE_FILLET)
-            p0.append(g_hi)
-            p1.append(g_lo)
-            rot.append(turn)
-            cen.append(np.zeros(2))
-            rad.append(0.0)
-    return Profile("outer", pair, np.array(kind), np.array(p0), np.array(p1), np.array(rot),
-                   np.array(cen), np.array(rad), lobes=n1, material_inside=False)
-
-
-def inner_profile(pair: PinGerotor) -> Profile:
-    n2 = pair.lobes_inner
-    k = np.arange(n2)
-    return Profile("inner", pair, np.full(n2, CODE_INNER), -TWO_PI * k, -TWO_PI * (k + 1),
-                   np.zeros(n2), np.zeros((n2, 2)), np.zeros(n2), lobes=n2,
-                   material_inside=True)
 
 
 # ------------------------------------------------------------------ clearance offsets
@@ -303,7 +184,7 @@ class Clearance:
 class OffsetProfile:
     """``base`` moved along its outward normal by ``direction * c(u)``."""
 
-    base: Profile
+    base: PieceCurve
     clearance: Clearance
     direction: int  # +1 grows the enclosed region, -1 shrinks it
 
@@ -322,10 +203,6 @@ class OffsetProfile:
     @property
     def material_inside(self):
         return self.base.material_inside
-
-    @property
-    def pair(self):
-        return self.base.pair
 
     def offset(self, u):
         return self.direction * self.clearance(self.base.lobe_fraction(u))
@@ -410,7 +287,7 @@ def region_volume(curve, sweep) -> float:
     return curve.base.area * i2 + curve.direction * m1 * i1 + m2 * sweep.length
 
 
-def offset_profile(base: Profile, clearance: Clearance, direction: int):
+def offset_profile(base: PieceCurve, clearance: Clearance, direction: int):
     """The clearance offset of ``base``, checked for folds; ``base`` if c = 0."""
     if clearance.largest == 0.0 and min(clearance.values) == 0.0:
         return base

@@ -53,7 +53,7 @@ def _offscreen():
 
 def _surfaces(case, wrap_outer_deg: float):
     from rotorflow.geometry.curves import sample
-    from rotorflow.geometry.export.solids import SweptSurface
+    from rotorflow.geometry.export.surface import SweptSurface
     from rotorflow.geometry.sweep import Sweep
 
     pair = case.pair

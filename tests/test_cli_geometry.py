@@ -53,6 +53,12 @@ BAD = {
     "unknown key": (GOOD.replace("[sweep]", "[sweep]\ncolour = 'red'"), "colour"),
     "unknown section": (GOOD + "\n[turbo]\nx = 1\n", "turbo"),
     "malformed": (GOOD.replace("lambda = 1.39934", "lambda = = 1"), "malformed"),
+    # the registry names the families it knows
+    "unknown machine type": (GOOD.replace('type = "internal-gear"', 'type = "scroll"'),
+                             "known: internal-gear"),
+    # keys belong to their family: a twin-screw key on an internal gear is unknown
+    "another family's key": (GOOD.replace("[machine]", "[machine]\nlobes_male = 4"),
+                             "lobes_male"),
 }
 
 

@@ -10,7 +10,8 @@ from manifold3d import CrossSection, FillRule
 
 from rotorflow.errors import CaseError
 from rotorflow.geometry.export import stl
-from rotorflow.geometry.export.driver import chamber_sum, export
+from rotorflow.geometry.export.assembly import chamber_sum
+from rotorflow.geometry.export.driver import export
 from rotorflow.geometry.export.settings import Export
 from rotorflow.geometry.internal_gear.space import PinSpace
 from rotorflow.geometry.ports import chamber_section, port_timing, ports

@@ -9,19 +9,21 @@ import pytest
 from rotorflow.errors import CaseError
 from rotorflow.geometry.curves import (
     Clearance,
-    check_simple,
     closest,
     offset_profile,
-    rings_intersections,
     sample,
     sample_polygon,
-    self_intersections,
-    signed_area,
 )
 from rotorflow.geometry.internal_gear.pair import PinGerotor
 from rotorflow.geometry.internal_gear.profiles import inner_profile, outer_profile
 from rotorflow.geometry.internal_gear.space import PinSpace
 from rotorflow.geometry.planar import cross
+from rotorflow.geometry.polygons import (
+    check_simple,
+    rings_intersections,
+    self_intersections,
+    signed_area,
+)
 from rotorflow.workflow.case import load_case
 
 from .conftest import CASES

@@ -6,8 +6,8 @@ import pytest
 
 from rotorflow.geometry.export.driver import export
 from rotorflow.geometry.export.settings import Export
-from rotorflow.geometry.export.solids import SweptSurface
 from rotorflow.geometry.export.step import check_step, hermite_net, write_rotor_step
+from rotorflow.geometry.export.surface import SweptSurface
 from rotorflow.geometry.internal_gear.profiles import inner_profile
 from rotorflow.geometry.summary import build_machine
 from rotorflow.workflow.case import load_case

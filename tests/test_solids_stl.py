@@ -10,13 +10,8 @@ import trimesh
 from rotorflow.geometry.export import stl
 from rotorflow.geometry.export.driver import export
 from rotorflow.geometry.export.settings import Export
-from rotorflow.geometry.export.solids import (
-    SweptSurface,
-    build_flank,
-    foot_points,
-    rotor_mesh,
-    validate_mesh,
-)
+from rotorflow.geometry.export.solids import build_flank, rotor_mesh, validate_mesh
+from rotorflow.geometry.export.surface import SweptSurface, foot_points
 from rotorflow.geometry.internal_gear.profiles import inner_profile, outer_profile
 from rotorflow.geometry.internal_gear.space import PinSpace
 from rotorflow.geometry.summary import build_machine

@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from ..curves import sample
-from .solids import SweptSurface
+from .surface import SweptSurface
 
 
 def cloud(surface: SweptSurface, spacing: float, material_inside: bool):

@@ -31,7 +31,7 @@ import numpy as np
 from rotorflow.errors import ExternalRunError
 
 from ..curves import sample
-from .solids import SweptSurface, foot_points
+from .surface import SweptSurface, foot_points
 
 log = logging.getLogger(__name__)
 

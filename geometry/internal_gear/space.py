@@ -354,24 +354,6 @@ class PinSpace:
         gt, st = self._fillet_arc_table
         return np.interp(g, gt, st)
 
-    def perimeters(self, a: Contact, b: Contact) -> tuple[float, float]:
-        """Outer and inner arc lengths bounding the region from contact a to b."""
-        p = self.pair
-        e = p.pin_edge
-        outer = 0.0
-        g_start = self._fillet_fit["g_hi"] if a.kind == "pin" else a.psi1
-        g_end = self._fillet_fit["g_lo"] if b.kind == "pin" else b.psi1
-        if a.kind == "pin":
-            outer += p.rho * abs(a.psi1 + e)
-        if b.kind == "pin":
-            outer += p.rho * abs(e - b.psi1)
-        if p.fillet_kind == "arc":
-            outer += self.fillet_length
-        else:
-            outer += abs(float(self.fillet_arc(g_start) - self.fillet_arc(g_end)))
-        inner = abs(float(self.inner_arc(a.g2) - self.inner_arc(b.g2)))
-        return outer, inner
-
     def whole_space_perimeters(self, phi1):
         """Outer and inner arc lengths of the undivided space (vectorised)."""
         p = self.pair

@@ -1,0 +1,96 @@
+"""Checks on sampled closed curves: self-intersections, simplicity, signed area.
+
+A profile or a section of a solid is only valid when its polygon is simple (an offset
+that folds, or two rotors that interfere, show up here); nothing is ever repaired.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rotorflow.errors import CaseError
+
+from .planar import cross
+
+
+def _segments_cross(a, b, c, d):
+    """Proper or touching intersection of segments ab and cd (arrays of pairs)."""
+    def orient(p, q, r):
+        return cross(q - p, r - p)
+
+    o1, o2 = orient(a, b, c), orient(a, b, d)
+    o3, o4 = orient(c, d, a), orient(c, d, b)
+    return (o1 * o2 <= 0.0) & (o3 * o4 <= 0.0) & ~((o1 == 0) & (o2 == 0))
+
+
+def self_intersections(poly: np.ndarray) -> np.ndarray:
+    """Indices (i, j) of non-adjacent edges of the closed polygon that intersect."""
+    return rings_intersections([poly])
+
+
+def rings_intersections(rings) -> np.ndarray:
+    """Pairs of intersecting edges among closed rings (edges numbered ring after ring;
+    edges sharing a vertex of the same ring are not compared).
+
+    Edges are bucketed on a uniform grid of cell size equal to the longest edge, so
+    only edges in neighbouring cells are compared.
+    """
+    a = np.concatenate(rings)
+    b = np.concatenate([np.roll(r, -1, axis=0) for r in rings])
+    ring_id = np.concatenate([np.full(len(r), k) for k, r in enumerate(rings)])
+    first = np.concatenate([[0], np.cumsum([len(r) for r in rings])])[:-1]
+    last = first + np.array([len(r) for r in rings]) - 1
+    lo = np.minimum(a, b)
+    hi = np.maximum(a, b)
+    cell = max(float(np.linalg.norm(b - a, axis=-1).max()), 1e-300)
+    origin = lo.min(0)
+    ilo = np.floor((lo - origin) / cell).astype(np.int64)
+    ihi = np.floor((hi - origin) / cell).astype(np.int64)
+    # every edge spans at most 2 x 2 cells
+    keys, owners = [], []
+    width = int(ihi[:, 0].max()) + 3
+    for dx in (0, 1):
+        for dy in (0, 1):
+            cx, cy = ilo[:, 0] + dx, ilo[:, 1] + dy
+            ok = (cx <= ihi[:, 0]) & (cy <= ihi[:, 1])
+            keys.append((cy * width + cx)[ok])
+            owners.append(np.nonzero(ok)[0])
+    keys = np.concatenate(keys)
+    owners = np.concatenate(owners)
+    order = np.argsort(keys, kind="stable")
+    keys, owners = keys[order], owners[order]
+    starts = np.nonzero(np.diff(np.concatenate([[-1], keys])))[0]
+    ends = np.append(starts[1:], len(keys))
+    pairs = []
+    sizes = ends - starts
+    for size in np.unique(sizes):
+        if size < 2:
+            continue
+        grp = starts[sizes == size]
+        idx = owners[grp[:, None] + np.arange(size)[None, :]]
+        ii, jj = np.triu_indices(size, 1)
+        pairs.append(np.stack([idx[:, ii].ravel(), idx[:, jj].ravel()], -1))
+    if not pairs:
+        return np.zeros((0, 2), dtype=int)
+    pr = np.unique(np.sort(np.concatenate(pairs), axis=1), axis=0)
+    i, j = pr[:, 0], pr[:, 1]
+    same = ring_id[i] == ring_id[j]
+    r = ring_id[i]
+    adjacent = same & ((j - i == 1) | ((i == first[r]) & (j == last[r])) | (i == j))
+    i, j = i[~adjacent], j[~adjacent]
+    hit = _segments_cross(a[i], b[i], a[j], b[j])
+    return np.stack([i[hit], j[hit]], -1)
+
+
+def check_simple(poly, what: str) -> None:
+    """Raise CaseError naming ``what`` and where, if the closed polygon (or the rings of
+    a list of polygons) self-intersects."""
+    rings = poly if isinstance(poly, list | tuple) else [poly]
+    hits = rings_intersections(rings)
+    if len(hits):
+        p = np.concatenate(rings)[hits[0, 0]]
+        raise CaseError(f"the {what} self-intersects near ({p[0] * 1e3:.4f}, {p[1] * 1e3:.4f}) mm")
+
+
+def signed_area(poly: np.ndarray) -> float:
+    return 0.5 * float(np.sum(cross(poly, np.roll(poly, -1, axis=0))))

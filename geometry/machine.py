@@ -28,8 +28,6 @@ from .pin_gerotor import TWO_PI, PinGerotor
 from .section import POINTS_PER_PERIOD, SectionChamber, section_chamber
 from .sweep import Sweep
 
-GAMMA_AIR = 1.4
-
 #: Section-table samples per step of the chamber curves.  The load error is the section
 #: table's, O(h^1.5) at its kinks: 32 (3072 per period at the default 96) puts Pi_max of
 #: the default case within 1e-4 of its converged value (make bench: geometry.csv).

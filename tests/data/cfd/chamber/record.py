@@ -28,8 +28,8 @@ from pathlib import Path
 from rotorflow.cases import chamber_case
 from rotorflow.geometry.summary import chamber_table
 from rotorflow.postprocess import chamber_compare
-from rotorflow.postprocess.leakage import FlowCoefficientFit
 from rotorflow.quasi1d import Leakage, Operating
+from rotorflow.quasi1d.calibrated import FlowCoefficientFit
 from rotorflow.workflow.case import load_case
 
 HERE = Path(__file__).resolve().parent

@@ -29,6 +29,7 @@ from rotorflow.cases.gap_study import (
     rotor_machine,
 )
 from rotorflow.postprocess.richardson import richardson
+from rotorflow.quasi1d.perfect_gas import PerfectGas
 
 log = logging.getLogger(__name__)
 
@@ -68,7 +69,7 @@ def cases() -> dict[str, gap_case.GapCase]:
     return {
         "channel-10um-PR1.005": gap_case.GapCase(
             gap_mesh.parallel_channel(10e-6, 1e-3),
-            gap_case.GapFlow(1.005e5, 300.0, 1e5, gas=gap_case.Air(transport="const")),
+            gap_case.GapFlow(1.005e5, 300.0, 1e5, gas=PerfectGas(transport="const")),
             gap_mesh.GapMeshSpec(cells_across=16, cells_along=20)),
         "tip-50um-PR1.5-laminar": gap_case.GapCase(
             tip, gap_case.GapFlow(1.5e5, 300.0, 1e5), tip_spec),

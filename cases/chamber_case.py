@@ -56,10 +56,11 @@ import numpy as np
 
 from rotorflow.errors import CaseError, ExternalRunError
 from rotorflow.postprocess import chamber_compare as cc
+from rotorflow.quasi1d.perfect_gas import PerfectGas
 
 from . import foam
 from .chamber_mesh import ChamberDomain, ChamberMeshSpec, build_foam_mesh, patch_types
-from .gap_case import RESULT_LOG_LINES, Air, looks_diverged, thermophysical_properties
+from .gap_case import RESULT_LOG_LINES, looks_diverged, thermophysical_properties
 from .gap_mesh import GapWalls, rotor_tip_gap
 
 log = logging.getLogger(__name__)
@@ -96,7 +97,7 @@ class Compression:
     gap_m: float
     """Minimum gap; 0: a sealed chamber."""
     tip_radius_m: float = TIP_RADIUS_M
-    gas: Air = field(default_factory=Air)
+    gas: PerfectGas = field(default_factory=PerfectGas)
 
     def __post_init__(self) -> None:
         a, v = np.asarray(self.angle_rad), np.asarray(self.volume_m3)
@@ -266,8 +267,7 @@ def compression_from_table(table, operating, leakage, *, seal_length_m: float | 
     angles = np.linspace(geo.suction_close, geo.discharge_open, n)
     seal = seal_length_m if seal_length_m is not None else seal_length_to_suction(
         table, geo.suction_close, geo.discharge_open)
-    gas = Air(molar_mass_kg_kmol=1e3 * operating.molar_mass_kg_mol,
-              cp_J_kgK=operating.cp_J_kgK)
+    gas = operating.constant_cp_gas
     return Compression(
         angle_rad=tuple(float(a) for a in angles),
         volume_m3=tuple(float(v) for v in geo.volume(angles)),
@@ -788,7 +788,7 @@ def _resolve(path: str, case_path: Path) -> Path:
 def _load_fit(ctx, settings: ChamberSettings):
     """The correlation for "cfd-calibrated": the section's file, else the cfd.leakage
     stage's; None (with a warning) when there is none or it does not load."""
-    from rotorflow.postprocess.leakage import FlowCoefficientFit
+    from rotorflow.quasi1d.calibrated import FlowCoefficientFit
 
     if settings.flow_coefficient is not None:
         path = _resolve(settings.flow_coefficient, ctx.case_path)

@@ -6,8 +6,9 @@ place with ``result.json``; an interrupted run never leaves a folder that looks 
 
 Boundary conditions: total pressure and total temperature at the inlet, static pressure
 at the outlet, adiabatic no-slip walls that may slide along themselves (the rotor surface
-speeds).  Air is a perfect gas; laminar unless the estimated gap Reynolds number asks for
-k-omega SST.
+speeds).  The gas is rotorflow's one perfect gas,
+:class:`~rotorflow.quasi1d.perfect_gas.PerfectGas` (air by default); laminar unless the
+estimated gap Reynolds number asks for k-omega SST.
 
 The mass flow is taken from both patches by ``surfaceFieldValue sum(phi)`` every
 iteration.  A run counts as converged only when the inlet and outlet flows agree within
@@ -33,8 +34,9 @@ from typing import Any
 import numpy as np
 
 from rotorflow.errors import CaseError, ExternalRunError
-from rotorflow.postprocess import leakage
 from rotorflow.postprocess.foam_output import PatchFlowHistory, read_patch_flows
+from rotorflow.quasi1d.flows import isentropic_mass_flux
+from rotorflow.quasi1d.perfect_gas import PerfectGas
 
 from . import foam
 from .gap_mesh import GapMeshSpec, GapWalls, build_foam_mesh
@@ -48,49 +50,12 @@ SOLVER = "rhoSimpleFoam"
 #: the hydraulic diameter of a slot is twice its height.
 RE_TURBULENT = 1150.0
 
-#: Universal gas constant, J/(kmol K).
-R_UNIVERSAL = 8314.462618
-
 #: Version of the case this module writes: bump it when dictionaries or judgement change,
 #: so that stored results of older cases are recomputed rather than reused.
 CASE_FORMAT = 2
 
 #: Log lines kept in a failed result.
 RESULT_LOG_LINES = 30
-
-
-@dataclass(frozen=True)
-class Air:
-    """Air as a perfect gas with constant cp; viscosity constant or Sutherland's law."""
-
-    molar_mass_kg_kmol: float = 28.9647
-    cp_J_kgK: float = 1005.0
-    prandtl: float = 0.71
-    transport: str = "sutherland"
-    """'sutherland' (mu from T) or 'const' (mu_Pa_s everywhere; for analytic checks)."""
-    mu_Pa_s: float = 1.81e-5
-    sutherland_As: float = 1.458e-6
-    sutherland_Ts_K: float = 110.4
-
-    def __post_init__(self) -> None:
-        if self.transport not in ("sutherland", "const"):
-            raise CaseError(f"air transport must be 'sutherland' or 'const', not {self.transport}")
-
-    @property
-    def R(self) -> float:
-        return R_UNIVERSAL / self.molar_mass_kg_kmol
-
-    @property
-    def gamma(self) -> float:
-        return self.cp_J_kgK / (self.cp_J_kgK - self.R)
-
-    def mu(self, T: float) -> float:
-        if self.transport == "const":
-            return self.mu_Pa_s
-        return self.sutherland_As * T**1.5 / (T + self.sutherland_Ts_K)
-
-    def density(self, p: float, T: float) -> float:
-        return p / (self.R * T)
 
 
 @dataclass(frozen=True)
@@ -103,7 +68,7 @@ class GapFlow:
     wall_speed_lower_m_s: float = 0.0
     """Speed of the lower wall along itself, positive from inlet to outlet."""
     wall_speed_upper_m_s: float = 0.0
-    gas: Air = field(default_factory=Air)
+    gas: PerfectGas = field(default_factory=PerfectGas)
     turbulence: str = "auto"
     """'laminar', 'kOmegaSST' or 'auto' (by the estimated gap Reynolds number)."""
 
@@ -213,11 +178,6 @@ class GapResult:
 # --- estimates ----------------------------------------------------------------------------
 
 
-def isentropic_mass_flux(p0: float, T0: float, p: float, gas: Air) -> float:
-    """Mass flux (kg/s/m2) of an isentropic nozzle from p0, T0 to p, choked below critical."""
-    return leakage.isentropic_mass_flux(p0, T0, p, gas.gamma, gas.R)
-
-
 def estimate_mass_flow(walls: GapWalls, flow: GapFlow) -> float:
     """A rough mass flow per depth (kg/s/m): viscous and nozzle limits in series.
 
@@ -229,7 +189,8 @@ def estimate_mass_flow(walls: GapWalls, flow: GapFlow) -> float:
     x = walls.sample_x(2001)
     resistance = np.trapezoid(walls.gap(x) ** -3.0, x)
     viscous = (flow.p_total_Pa**2 - flow.p_exit_Pa**2) / (24 * gas.mu(T0) * gas.R * T0 * resistance)
-    nozzle = walls.min_gap * isentropic_mass_flux(flow.p_total_Pa, T0, flow.p_exit_Pa, gas)
+    nozzle = walls.min_gap * isentropic_mass_flux(flow.p_total_Pa, T0, flow.p_exit_Pa,
+                                                  gas.gamma, gas.R)
     return 1.0 / math.hypot(1.0 / viscous, 1.0 / nozzle)
 
 
@@ -347,7 +308,7 @@ def _fv_solution(transonic: bool) -> dict[str, Any]:
     }
 
 
-def thermophysical_properties(gas: Air) -> dict[str, Any]:
+def thermophysical_properties(gas: PerfectGas) -> dict[str, Any]:
     """constant/thermophysicalProperties of ``gas``: a perfect gas with constant cp and
     Sutherland or constant viscosity (hePsiThermo, sensible internal energy)."""
     transport = (
@@ -431,7 +392,7 @@ def _write_fields(case_dir: Path, case: GapCase, turbulence: str, centres: dict)
     if turbulence == "laminar":
         return
     # Inflow turbulence: 5 % intensity of the nozzle velocity, length scale a tenth of the gap.
-    u_ref = isentropic_mass_flux(p0, T0, p2, gas) / gas.density(p2, T0)
+    u_ref = isentropic_mass_flux(p0, T0, p2, gas.gamma, gas.R) / gas.density(p2, T0)
     k_in = 1.5 * (0.05 * u_ref) ** 2
     omega_in = math.sqrt(k_in) / (0.09**0.25 * 0.1 * case.walls.min_gap)
     inflow = {"type": "turbulentIntensityKineticEnergyInlet", "intensity": 0.05,

@@ -419,14 +419,14 @@ def run_stage(ctx) -> dict:
     """Workflow stage ``cfd.leakage``: the leakage matrix, its comparison and fit.
 
     Writes into ``ctx.out``: ``studies.json`` (every mesh study, failed ones with their
-    reasons), and through :func:`rotorflow.postprocess.leakage.write_report` the error
+    reasons), and through :func:`rotorflow.postprocess.leakage_report.write_report` the error
     table, the fitted flow coefficient (``flow_coefficient.json``) and its plot.  The runs
     live under ``[cfd] runs_dir`` (relative to the case file) when given, so that points
     already computed are reused when the stage reruns; else inside the stage's folder.
     """
     import json
 
-    from rotorflow.postprocess import leakage
+    from rotorflow.postprocess import leakage, leakage_report
 
     section = ctx.raw.get("cfd", {})
     where = str(ctx.case_path)
@@ -449,5 +449,5 @@ def run_stage(ctx) -> dict:
         log.warning("quasi-1D leakage models unavailable, compared with the nozzle only: %s",
                     exc)
         models = {"nozzle": leakage.nozzle_model()}
-    summary = leakage.write_report(good, ctx.out, models) if len(good) > 3 else {}
+    summary = leakage_report.write_report(good, ctx.out, models) if len(good) > 3 else {}
     return {"points": len(studies), "failed": sum(not s.ok for s in studies), **summary}

@@ -16,13 +16,15 @@ import numpy as np
 
 from .machine import SweptMachine
 
-#: Isentropic exponent of seed 000's ideal cycle (its section 4.3 takes air as a perfect
-#: gas with kappa = 1.4).  An assumption of that dimensionless design cycle, not a gas
-#: model: the quasi-1D model has the gases.
-GAMMA_AIR = 1.4
+#: Isentropic exponent of seed 000's ideal adiabatic cycle ("an ideal gas with gamma =
+#: 1.4", section 4.3).  An assumption of that cycle, not a gas model: the quasi-1D model
+#: takes its gas from rotorflow.quasi1d (which geometry must not import: quasi1d imports
+#: geometry.table).
+IDEAL_CYCLE_GAMMA = 1.4
 
 
-def adiabatic_pressure(volume, eps_v: float, p_suction: float = 1.0e5, gamma: float = GAMMA_AIR):
+def adiabatic_pressure(volume, eps_v: float, p_suction: float = 1.0e5,
+                       gamma: float = IDEAL_CYCLE_GAMMA):
     """Pressure along a chamber's life: suction, adiabatic compression, matched discharge.
 
     Suction at ``p_suction`` until the volume peaks; then ``p (V_max/V)^gamma`` until
@@ -44,7 +46,7 @@ def adiabatic_pressure(volume, eps_v: float, p_suction: float = 1.0e5, gamma: fl
     return p
 
 
-def cycle_work(volume_max: float, eps_v: float, p_suction: float, gamma: float = GAMMA_AIR):
+def cycle_work(volume_max: float, eps_v: float, p_suction: float, gamma: float = IDEAL_CYCLE_GAMMA):
     """Indicated work per chamber and cycle, seed 000 Eq. 17."""
     p_dis = p_suction * eps_v**gamma
     return gamma / (gamma - 1.0) * (p_dis * volume_max / eps_v - p_suction * volume_max)
@@ -97,7 +99,7 @@ def power_split(
     eps_v: float,
     driven: str = "auto",
     p_suction: float = 1.0e5,
-    gamma: float = GAMMA_AIR,
+    gamma: float = IDEAL_CYCLE_GAMMA,
 ) -> PowerSplit:
     """Seed 000 Eqs. 17-22: power balance, power ratios, driven rotor and Pi_max."""
     # Loads on the fine section grid: the power ratios have kinks (a chamber starting

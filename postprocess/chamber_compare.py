@@ -14,7 +14,7 @@ suction pressure and temperature.  With its mass m and internal energy U as stat
 where mdot = A sqrt(p_up rho_up) f(p_down / p_up) (times a coefficient) for the
 quasi-1D model's leakage models (:mod:`rotorflow.quasi1d.flows`: isentropic nozzle,
 isothermal Fanno flow), and mdot = L_s m'(point) for the CFD-calibrated correlation of
-:mod:`rotorflow.postprocess.leakage` (a mass flow per metre of sealing line).  h_up is
+:mod:`rotorflow.quasi1d.calibrated` (a mass flow per metre of sealing line).  h_up is
 the enthalpy of the side the gas comes from.  Time is angle over the outer rotor's speed.
 
 Differences are p_model(theta) - p_CFD(theta) at the CFD's samples; "max" is the largest
@@ -270,9 +270,10 @@ def flux_leak(area_m2: float, chamber: SingleChamber, model: str, coefficient: f
 
 def correlation_leak(fit, gap_m: float, gap_length_m: float, seal_length_m: float,
                      chamber: SingleChamber, mu: Callable[[float], float]) -> LeakFlow:
-    """A fitted flow-coefficient correlation (:class:`~.leakage.FlowCoefficientFit`) as a
-    leakage: its mass flow per metre times the sealing-line length; back flow from the
-    plenum is the same law with the plenum upstream."""
+    """A fitted flow-coefficient correlation
+    (:class:`~rotorflow.quasi1d.calibrated.FlowCoefficientFit`) as a leakage: its mass flow
+    per metre times the sealing-line length; back flow from the plenum is the same law with
+    the plenum upstream."""
     from .leakage import LeakagePoint
 
     model = fit.model()
@@ -456,11 +457,11 @@ def leak_models(desc: Mapping, leakage=None, fit=None) -> dict[str, LeakFlow | N
             area, chamber, "fanno", cd_fanno, leakage.zeta),
     }
     if fit is not None:
-        from rotorflow.cases.gap_case import Air
+        from rotorflow.quasi1d.perfect_gas import PerfectGas
 
         models["cfd-calibrated"] = correlation_leak(
             fit, float(desc["gap_m"]), float(desc["gap_length_m"]),
-            float(desc["seal_length_m"]), chamber, Air(**desc["gas"]).mu)
+            float(desc["seal_length_m"]), chamber, PerfectGas(**desc["gas"]).mu)
     return models
 
 

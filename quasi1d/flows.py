@@ -27,6 +27,9 @@ flux becomes linear in the pressure difference (slope sqrt(2 / DELTA_X)).  A kin
 linear band would serve the physics as well but not the integrators: the port flows of
 a filling chamber sit right at such small pressure drops, and a kink there makes every
 error estimator take tiny steps.
+
+The nozzle formula itself, unsmoothed, is :func:`nozzle_psi`; the CFD cases and the
+leakage analysis use it through :func:`isentropic_mass_flux` (the ideal flow of a gap).
 """
 
 from __future__ import annotations
@@ -52,17 +55,30 @@ def nozzle_critical_ratio(k):
     return (2.0 / (k + 1.0)) ** (k / (k - 1.0))
 
 
-def nozzle_f(x, k):
-    """Dimensionless nozzle flux f(x, k) for x = p2/p1 in [0, 1] (arrays or scalars)."""
+def nozzle_psi(x, k):
+    """The isentropic nozzle's flux over sqrt(p1 rho1) for x = p2/p1 in [0, 1] (arrays or
+    scalars): Eqs. 7-8, choked below the critical ratio; not smoothed at x -> 1."""
     if np.ndim(k):
         xc = nozzle_critical_ratio(k)
         c = 2.0 * k / (k - 1.0)
         ik = 1.0 / k
     else:
         xc, c, ik = _nozzle_constants(float(k))
-    xe = np.maximum(_x_eff(x), xc)
-    r = xe**ik
+    xe = np.maximum(x, xc)
+    r = xe**ik  # x^(2/k) - x^((k+1)/k) = r (r - x): one power instead of two
     return np.sqrt(c * r * (r - xe))
+
+
+def nozzle_f(x, k):
+    """Dimensionless nozzle flux f(x, k) of the chamber model: :func:`nozzle_psi` with the
+    pressure drop smoothed near x = 1 (see the module docstring)."""
+    return nozzle_psi(_x_eff(x), k)
+
+
+def isentropic_mass_flux(p0: float, T0: float, p: float, gamma: float, R: float) -> float:
+    """Mass flux (kg/s/m^2) of an isentropic nozzle from rest at p0, T0 of a perfect gas
+    (gamma, R) to the pressure p; choked below the critical pressure."""
+    return float(nozzle_psi(p / p0, gamma)) * math.sqrt(p0 * p0 / (R * T0))
 
 
 @functools.lru_cache(maxsize=64)

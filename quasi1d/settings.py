@@ -33,10 +33,11 @@ from dataclasses import dataclass
 
 from rotorflow.errors import CaseError
 
+from .perfect_gas import PerfectGas
+
 BAR = 1.0e5
 AIR_MOLAR_MASS_G_MOL = 28.97  # seed 001, Table 3
 AIR_CP_J_KGK = 1006.43  # seed 001, Table 3
-R_UNIVERSAL = 8.314462618  # J/(mol K)
 
 LEAKAGE_MODELS = ("none", "nozzle", "fanno", "cfd-calibrated")
 PORT_MODELS = ("ideal", "nozzle")
@@ -146,8 +147,15 @@ class Operating:
     )
 
     @property
+    def constant_cp_gas(self) -> PerfectGas:
+        """The perfect gas of ``molar_mass_g_mol`` and ``cp_J_kgK``: the fluid when
+        heat_capacity is "constant", and the gas of the CFD chamber case."""
+        return PerfectGas(molar_mass_kg_kmol=1e3 * self.molar_mass_kg_mol,
+                          cp_J_kgK=self.cp_J_kgK)
+
+    @property
     def R_J_kgK(self) -> float:
-        return R_UNIVERSAL / self.molar_mass_kg_mol
+        return self.constant_cp_gas.R
 
     @property
     def perfect_gas(self) -> bool:
@@ -267,7 +275,7 @@ class Leakage:
     # plus ~1.5 for the entry and exit losses -> ~2; seed 003 takes it as an input.
     zeta: float = 2.0
     wall_motion: bool = False
-    correlation: object = None  # a postprocess.leakage.FlowCoefficientFit
+    correlation: object = None  # a quasi1d.calibrated.FlowCoefficientFit
     land_m: float = 1.0e-3
     viscosity_Pa_s: float = 1.8e-5  # air near 300 K
 
@@ -305,7 +313,7 @@ def _load_correlation(d: dict, section: str, where: str):
     """The CFD flow-coefficient fit named by ``correlation`` (relative to the case file)."""
     from pathlib import Path
 
-    from rotorflow.postprocess.leakage import FlowCoefficientFit
+    from .calibrated import FlowCoefficientFit
 
     name = d.get("correlation")
     if not isinstance(name, str):

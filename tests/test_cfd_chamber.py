@@ -20,8 +20,9 @@ from rotorflow.cases import chamber_case
 from rotorflow.cases.foam import MeshQuality
 from rotorflow.errors import CaseError
 from rotorflow.postprocess import chamber_compare as cc
-from rotorflow.postprocess.leakage import FlowCoefficientFit, mismatches
+from rotorflow.postprocess.leakage import mismatches
 from rotorflow.quasi1d import Leakage
+from rotorflow.quasi1d.calibrated import FlowCoefficientFit
 
 DATA = Path(__file__).resolve().parent / "data" / "cfd" / "chamber"
 LEAKING, SEALED = DATA / "leaking", DATA / "sealed"

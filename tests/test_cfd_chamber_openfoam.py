@@ -19,8 +19,8 @@ from rotorflow.cases import chamber_case, foam
 from rotorflow.geometry import table as table_io
 from rotorflow.geometry.summary import chamber_table
 from rotorflow.postprocess import chamber_compare as cc
-from rotorflow.postprocess.leakage import FlowCoefficientFit
 from rotorflow.quasi1d import Leakage, Operating
+from rotorflow.quasi1d.calibrated import FlowCoefficientFit
 from rotorflow.workflow.case import load_case
 
 pytestmark = [

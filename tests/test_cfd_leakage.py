@@ -8,8 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from rotorflow.postprocess import leakage
+from rotorflow.postprocess import leakage, leakage_report
 from rotorflow.postprocess.leakage import LeakagePoint
+from rotorflow.quasi1d import calibrated
 
 R_AIR, GAMMA = 287.05, 1.4
 
@@ -22,25 +23,6 @@ def point(name="p", gap=50e-6, length=1e-3, pr=2.0, mass_flow=math.nan, mu=1.85e
 
 
 # --- reference formulas -------------------------------------------------------------------
-
-
-def test_choked_nozzle_flux_is_the_textbook_value():
-    # Air, gamma 1.4: m'' = 0.6847 p0 / sqrt(R T0) at and below the critical ratio 0.5283.
-    p0, T0 = 3e5, 300.0
-    expected = 0.68473 * p0 / math.sqrt(R_AIR * T0)
-    for p in (0.5283 * p0, 0.3 * p0, 0.0):
-        assert leakage.isentropic_mass_flux(p0, T0, p, GAMMA, R_AIR) == pytest.approx(
-            expected, rel=1e-4)  # 5 significant digits of the textbook constant
-    assert leakage.isentropic_mass_flux(p0, T0, p0, GAMMA, R_AIR) == 0.0
-
-
-def test_nozzle_flux_at_low_pressure_drop_is_bernoulli():
-    p0, T0, dp = 1e5, 300.0, 10.0
-    rho = p0 / (R_AIR * T0)
-    bernoulli = rho * math.sqrt(2 * dp / rho)
-    # Compressibility corrections are O(dp/p0) = 1e-4.
-    assert leakage.isentropic_mass_flux(p0, T0, p0 - dp, GAMMA, R_AIR) == pytest.approx(
-        bernoulli, rel=3e-4)
 
 
 def test_compressible_poiseuille_reduces_to_the_incompressible_law():
@@ -96,7 +78,7 @@ TRUE = (1.3, 0.4, 0.6)  # A = 1.3 + 0.4 ln PR, b = 0.6
 
 def synthetic_points(noise=None):
     """Points whose Cd follows A Cd^2 + b X Cd = 1 exactly (times optional scatter)."""
-    truth = leakage.FlowCoefficientFit(("1", "ln(PR)"), TRUE[:2], TRUE[2])
+    truth = calibrated.FlowCoefficientFit(("1", "ln(PR)"), TRUE[:2], TRUE[2])
     pts = []
     rng = np.random.default_rng(7)
     for gap in (5e-6, 20e-6, 50e-6, 200e-6):
@@ -113,17 +95,11 @@ def synthetic_points(noise=None):
 def test_viscous_limit_of_the_fit_form_is_lubrication_flow():
     # A = 0, b = 1: Cd = 1 / X, which must be the isothermal plane Poiseuille flow exactly
     # (X is built from it), at any pressure ratio.
-    viscous_only = leakage.FlowCoefficientFit(("1",), (0.0,), 1.0)
+    viscous_only = calibrated.FlowCoefficientFit(("1",), (0.0,), 1.0)
     for pr in (1.001, 1.5, 3.0):
         p = point(gap=10e-6, length=1e-3, pr=pr)
         assert viscous_only.model()(p) == pytest.approx(leakage.plane_poiseuille_mass_flow(p),
                                                          rel=1e-12)
-
-
-def test_inviscid_limit_of_the_fit_form_is_a_nozzle():
-    # b = 0, A = 1/0.8^2: Cd = 0.8 whatever the Reynolds number.
-    nozzle_only = leakage.FlowCoefficientFit(("1",), (1 / 0.64,), 0.0)
-    assert nozzle_only.flow_coefficient(10.0, 2.0, 50.0) == pytest.approx(0.8)
 
 
 def test_fit_recovers_a_known_correlation_and_predicts_left_out_points():
@@ -139,7 +115,7 @@ WALL = 1.3  # w: the drag flow over rho_c U h_min (4/3 for a parabolic throat)
 
 def moving_points(speeds=(-5.0, 15.0, 40.0)):
     """Points whose Cd follows A Cd|Cd| + b X (Cd - w W) = 1 with walls moving."""
-    truth = leakage.FlowCoefficientFit(("1", "ln(PR)"), TRUE[:2], TRUE[2], wall=WALL)
+    truth = calibrated.FlowCoefficientFit(("1", "ln(PR)"), TRUE[:2], TRUE[2], wall=WALL)
     pts = []
     for gap in (20e-6, 50e-6, 200e-6):  # at 5 um walls running back reverse the flow
         for pr in (1.1, 2.5):
@@ -153,23 +129,23 @@ def moving_points(speeds=(-5.0, 15.0, 40.0)):
 def test_wall_term_limits_are_couette_and_nothing():
     # Viscous limit (A = 0, b = 1, w = 1): Cd = 1/X + W, i.e. lubrication pressure flow
     # plus the drag flow rho_c U h.  At PR -> 1, rho_c -> rho_up.
-    fit = leakage.FlowCoefficientFit(("1",), (0.0,), 1.0, wall=1.0)
+    fit = calibrated.FlowCoefficientFit(("1",), (0.0,), 1.0, wall=1.0)
     p = point(gap=10e-6, length=1e-3, pr=1.0001, wall=5.0)
     rho = p.p_up_Pa / (R_AIR * p.T_up_K)
     expected = leakage.plane_poiseuille_mass_flow(p) + rho * 5.0 * p.gap_m
     assert fit.model()(p) == pytest.approx(expected, rel=1e-4)  # rho_c/rho_up - 1 ~ 1e-4
-    assert leakage.drag_density_ratio(np.array([1.0, 1.0 + 1e-9, 1e9])) == pytest.approx(
+    assert calibrated.drag_density_ratio(np.array([1.0, 1.0 + 1e-9, 1e9])) == pytest.approx(
         [1.0, 1.0, 2.0 / 3.0], rel=1e-6)
     # Inviscid limit (b = 0): the walls change nothing.
-    nozzle = leakage.FlowCoefficientFit(("1",), (1 / 0.64,), 0.0, wall=1.0)
+    nozzle = calibrated.FlowCoefficientFit(("1",), (1 / 0.64,), 0.0, wall=1.0)
     assert nozzle.flow_coefficient(10.0, 2.0, 50.0, 0.3) == pytest.approx(0.8)
     # Walls running backwards faster than the pressure pushes: the flow reverses, and
     # the coefficient stays a root of A Cd|Cd| + b X (Cd - w W) = 1.
-    fit = leakage.FlowCoefficientFit(("1",), (1.5,), 0.8, wall=1.0)
+    fit = calibrated.FlowCoefficientFit(("1",), (1.5,), 0.8, wall=1.0)
     re, pr, lh, v = 20.0, 1.1, 200.0, -0.5
     cd = fit.flow_coefficient(re, pr, lh, v)
-    x = leakage.viscous_parameter(re, pr, lh)
-    w = leakage.couette_parameter(v, pr)
+    x = calibrated.viscous_parameter(re, pr, lh)
+    w = calibrated.couette_parameter(v, pr)
     assert cd < 0
     assert 1.5 * cd * abs(cd) + 0.8 * x * (cd - w) == pytest.approx(1.0, rel=1e-12)
 
@@ -208,7 +184,7 @@ def test_fit_saved_before_the_wall_term_loads_with_it_zero(tmp_path):
     for key in ("wall", "leave_out_moving"):
         del old[key]
     old["ranges"].pop("wall_speed_ratio")
-    back = leakage.FlowCoefficientFit.from_json(json.dumps(old))
+    back = calibrated.FlowCoefficientFit.from_json(json.dumps(old))
     assert back.wall == 0.0 and back.leave_out_moving == ()
     assert back.flow_coefficient(50.0, 1.3, 10.0) == fit.flow_coefficient(50.0, 1.3, 10.0)
     assert back.leave_out_summary()["static"]["points"] == len(fit.leave_out_errors)
@@ -217,7 +193,7 @@ def test_fit_saved_before_the_wall_term_loads_with_it_zero(tmp_path):
 
     recorded = Path(__file__).parent / "data" / "cfd" / "chamber" / "flow_coefficient.json"
     assert "wall" not in json.loads(recorded.read_text())
-    assert leakage.FlowCoefficientFit.load(recorded).wall == 0.0
+    assert calibrated.FlowCoefficientFit.load(recorded).wall == 0.0
 
 
 def test_fit_leave_out_error_reveals_noisy_data():
@@ -230,7 +206,7 @@ def test_fit_leave_out_error_reveals_noisy_data():
 
 def test_fit_round_trips_through_json(tmp_path):
     fit = leakage.fit_flow_coefficient(synthetic_points())
-    back = leakage.FlowCoefficientFit.load(fit.save(tmp_path / "fit.json"))
+    back = calibrated.FlowCoefficientFit.load(fit.save(tmp_path / "fit.json"))
     assert back == fit
     re, pr, lh = np.array([50.0, 500.0]), np.array([1.3, 2.0]), np.array([10.0, 40.0])
     np.testing.assert_array_equal(back.flow_coefficient(re, pr, lh),
@@ -243,7 +219,7 @@ def test_fit_json_with_unknown_feature_is_refused(tmp_path):
     text = leakage.fit_flow_coefficient(synthetic_points()).to_json().replace('"ln(PR)"',
                                                                              '"PR^2"')
     with pytest.raises(ValueError, match="PR\\^2"):
-        leakage.FlowCoefficientFit.from_json(text)
+        calibrated.FlowCoefficientFit.from_json(text)
 
 
 def test_fit_needs_more_points_than_coefficients():
@@ -261,8 +237,8 @@ def test_quasi1d_nozzle_agrees_with_the_reference_nozzle():
         pytest.skip(f"rotorflow.quasi1d leakage models not available: {exc}")
     nozzle = models["quasi1d-nozzle"]
     # The quasi-1D model smooths the flux near PR = 1 (relative change ~DELTA_X^2/(2y^2)
-    # with y = 1 - 1/PR, DELTA_X = 1e-4: 6e-7 at PR 1.1); beyond that the two
-    # implementations of the same formula must agree.
+    # with y = 1 - 1/PR, DELTA_X = 1e-4: 6e-7 at PR 1.1); beyond that its flux and the
+    # unsmoothed nozzle of the ideal flow (one formula, flows.nozzle_psi) must agree.
     for pr in (1.1, 1.5, 1.8929, 3.0):
         p = point(pr=pr)
         assert nozzle(p) == pytest.approx(p.ideal_mass_flow, rel=1e-6)
@@ -274,7 +250,7 @@ def test_quasi1d_nozzle_agrees_with_the_reference_nozzle():
 def test_report_writes_tables_fit_and_plot(tmp_path):
     pts = synthetic_points()
     moving = moving_points()
-    summary = leakage.write_report([*pts, *moving], tmp_path,
+    summary = leakage_report.write_report([*pts, *moving], tmp_path,
                                    {"nozzle": leakage.nozzle_model()})
     for name in ("leakage_errors.csv", "leakage_errors.md", "flow_coefficient.json",
                  "flow_coefficient.png"):
@@ -284,7 +260,7 @@ def test_report_writes_tables_fit_and_plot(tmp_path):
     assert summary["fit"]["wall"] == pytest.approx(WALL, rel=1e-9)
     loo = summary["fit"]["leave_out"]
     assert (loo["static"]["points"], loo["moving"]["points"]) == (len(pts), len(moving))
-    fit = leakage.FlowCoefficientFit.load(tmp_path / "flow_coefficient.json")
+    fit = calibrated.FlowCoefficientFit.load(tmp_path / "flow_coefficient.json")
     assert len(fit.leave_out_errors) == len(pts) + len(moving)
     text = (tmp_path / "leakage_errors.md").read_text()
     assert "cfd-calibrated" in text and "moving walls" in text
@@ -301,14 +277,14 @@ def test_report_section_names_failed_studies(tmp_path):
 
     artifact, report_dir = tmp_path / "a", tmp_path / "r"
     report_dir.mkdir()
-    leakage.write_report(synthetic_points(), artifact, {"nozzle": leakage.nozzle_model()})
+    leakage_report.write_report(synthetic_points(), artifact, {"nozzle": leakage.nozzle_model()})
     studies = [{"name": "ok-point", "ok": True, "failures": [], "kind": "monotone",
                 "order": 1.9, "default_error": 0.01, "extrapolated_kg_s_m": 0.02},
                {"name": "bad-point", "ok": False, "failures": ["fine: diverged (sigFpe)"],
                 "kind": "failed", "order": float("nan"), "default_error": float("nan"),
                 "extrapolated_kg_s_m": float("nan")}]
     (artifact / "studies.json").write_text(json.dumps(studies))
-    section = leakage.report_section(artifact, report_dir, None)
+    section = leakage_report.report_section(artifact, report_dir, None)
     assert "bad-point: fine: diverged (sigFpe)" in section.html
     assert "cfd-calibrated" in section.html
     assert (report_dir / "cfd_leakage_flow_coefficient.png").stat().st_size > 0

@@ -11,7 +11,7 @@ import pytest
 
 from rotorflow.cases import foam
 from rotorflow.cases.gap_study import DEFAULT_MESH_TOL, MatrixPoint, run_leakage_matrix
-from rotorflow.postprocess import leakage
+from rotorflow.postprocess import leakage, leakage_report
 
 pytestmark = [
     pytest.mark.slow,
@@ -43,7 +43,7 @@ def test_matrix_slice_meets_the_mesh_target_and_fits(tmp_path):
           for p in points}
     for pr in PRESSURE_RATIOS:
         assert by[(5, pr)] < by[(50, pr)]
-    summary = leakage.write_report(points, tmp_path / "report", leakage.quasi1d_models())
+    summary = leakage_report.write_report(points, tmp_path / "report", leakage.quasi1d_models())
     fit = summary["fit"]
     assert all(math.isfinite(c) for c in [*fit["inertial"], fit["viscous"]])
     # The correlation must predict points it did not see better than the plain nozzle

@@ -11,6 +11,7 @@ import pytest
 from rotorflow.cases import foam, gap_case, gap_mesh, gap_study
 from rotorflow.errors import CaseError
 from rotorflow.postprocess import leakage
+from rotorflow.quasi1d.perfect_gas import PerfectGas
 
 pytestmark = [
     pytest.mark.openfoam,
@@ -22,7 +23,7 @@ pytestmark = [
 #: Plane Poiseuille channel: 10 um x 1 mm, 0.5 % pressure drop, constant viscosity;
 #: Re ~ 0.15, L/h = 100: fully developed Stokes flow, so the analytic law is exact.
 GAP, LENGTH, P_EXIT, T0 = 10e-6, 1e-3, 1.0e5, 300.0
-AIR = gap_case.Air(transport="const")
+AIR = PerfectGas(transport="const")
 SPEC = gap_mesh.GapMeshSpec(cells_across=16, cells_along=20)
 
 

@@ -186,7 +186,7 @@ def test_recorded_wall_drag_is_that_of_lubrication_theory():
     # loss of a finite Reynolds number (~40 here) can only take some of it away.
     import numpy as np
 
-    from rotorflow.postprocess.leakage import drag_density_ratio
+    from rotorflow.quasi1d.calibrated import drag_density_ratio
 
     point, _, moving = recorded_study(True)
     _, _, static = recorded_study(False)

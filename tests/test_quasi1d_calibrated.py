@@ -7,12 +7,13 @@ import numpy as np
 import pytest
 
 from rotorflow.errors import CaseError
-from rotorflow.postprocess.leakage import FlowCoefficientFit, LeakagePoint, nozzle_psi
+from rotorflow.postprocess.leakage import LeakagePoint
 from rotorflow.quasi1d import Leakage, Operating, Ports, simulate
+from rotorflow.quasi1d.calibrated import FlowCoefficientFit
 from rotorflow.quasi1d.chamber import prepare
-from rotorflow.quasi1d.fluids import IdealGas
+from rotorflow.quasi1d.flows import nozzle_psi
 from rotorflow.quasi1d.model import build
-from rotorflow.quasi1d.settings import R_UNIVERSAL
+from rotorflow.quasi1d.perfect_gas import PerfectGas
 from rotorflow.quasi1d.synthetic import scaled_table, sin2_table
 
 OP = {"p_suction_bar": 1.0, "p_discharge_bar": 4.0, "T_suction_K": 300.0, "speed_rpm": 3000.0,
@@ -53,6 +54,12 @@ def test_viscous_term_reduces_leakage(tmp_path):
     assert viscous["mass_flow_kg_s"] > inviscid["mass_flow_kg_s"]
 
 
+def test_inviscid_limit_of_the_fit_form_is_a_nozzle():
+    # b = 0, A = 1/0.8^2: Cd = 0.8 whatever the Reynolds number.
+    nozzle_only = FlowCoefficientFit(("1",), (1 / 0.64,), 0.0)
+    assert nozzle_only.flow_coefficient(10.0, 2.0, 50.0) == pytest.approx(0.8)
+
+
 def test_missing_or_malformed_fit_is_a_case_error(tmp_path):
     where = str(tmp_path / "case.toml")
     with pytest.raises(CaseError, match="not found"):
@@ -67,14 +74,14 @@ def test_missing_or_malformed_fit_is_a_case_error(tmp_path):
 
 # --- moving walls: the fit's own drag term on the interlobe lines ------------------------
 #
-# The fit models A Cd|Cd| + b X (Cd - w W) = 1 (rotorflow.postprocess.leakage): with a
+# The fit models A Cd|Cd| + b X (Cd - w W) = 1 (rotorflow.quasi1d.calibrated): with a
 # wall term w the drag flow is part of the correlation, so the quasi-1D model passes the
 # wall speed to it on the interlobe lines and adds no Couette term of its own there.  The
 # checks below evaluate the chamber model's path flows at chosen states and compare them
 # with the fit evaluated directly on LeakagePoints (flow_coefficient * ideal_mass_flow, a
 # separate code path from the model's finite form FlowCoefficientFit.reduced_flux).
 
-GAS = IdealGas(R_UNIVERSAL / 0.02897, 1006.43)
+GAS = PerfectGas(molar_mass_kg_kmol=28.97, cp_J_kgK=1006.43)
 # Coefficients of the order of the CFD matrix's fit (w = 1.31 as fitted on moving walls).
 INERTIAL, VISCOUS, WALL = (0.91, 0.23), 0.57, 1.31
 GAP, LAND, MU = 20e-6, 1e-3, 1.8e-5
@@ -160,7 +167,7 @@ def test_reduced_flux_is_the_fit_times_psi_and_finite_at_equal_pressure():
     fit = wall_fit()
     pr = np.array([1.001, 1.05, 1.5, 2.5, 6.0])
     S = np.sqrt(2e5 * 2e5 / (GAS.R * 300.0))
-    psi = nozzle_psi(pr, GAS.gamma)
+    psi = nozzle_psi(1.0 / pr, GAS.gamma)
     re = GAP * psi * S / MU
     K = 24 * LAND * MU / (GAP**2 * S)
     for v in (0.0, 0.02, -0.02):
@@ -171,7 +178,7 @@ def test_reduced_flux_is_the_fit_times_psi_and_finite_at_equal_pressure():
     g0 = fit.reduced_flux(0.0, 1.0, K, 0.02)
     assert g0 > 0 and fit.reduced_flux(0.0, 1.0, K, -0.02) == pytest.approx(-g0, rel=1e-14)
     near = 1.0 + 1e-9
-    psi_n = nozzle_psi(near, GAS.gamma)
+    psi_n = nozzle_psi(1.0 / near, GAS.gamma)
     assert fit.flow_coefficient(GAP * psi_n * S / MU, near, LAND / GAP, 0.02) * psi_n == (
         pytest.approx(g0, rel=1e-6))
     assert fit.reduced_flux(0.0, 1.0, K, 0.0) == 0.0
@@ -286,7 +293,7 @@ def test_leakage_is_continuous_through_equal_pressures_with_moving_walls():
     s = -1e-2
     F, E = flow(s, enthalpy=True)
     assert F < 0
-    assert E == pytest.approx(F * GAS.cp * Tb, rel=1e-12)  # the older chamber's enthalpy
+    assert E == pytest.approx(F * GAS.cp_J_kgK * Tb, rel=1e-12)  # the older chamber's enthalpy
     p_down = p0 * (1 + s)
     rho_down = p_down / (GAS.R * Tb)
     want = fit_flow(fit, p0, p0 / (GAS.R * rho_down), p_down, -wall_speed(model)) * length

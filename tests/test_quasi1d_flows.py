@@ -17,10 +17,10 @@ import pytest
 from scipy.integrate import quad
 
 from rotorflow.quasi1d import flows
-from rotorflow.quasi1d.fluids import IdealGas
 from rotorflow.quasi1d.integrate import integrate_period
+from rotorflow.quasi1d.perfect_gas import PerfectGas
 
-AIR = IdealGas(R=287.0, cp=1004.5)  # gamma = 1.4 exactly
+AIR = PerfectGas.from_gas_constant(287.0, 1004.5)  # gamma = 1.4 exactly (R = 287.0 exactly)
 
 
 @dataclass(frozen=True)
@@ -164,3 +164,27 @@ def test_rosenbrock_blowdown_converges_at_second_order():
         errs.append(np.max(np.abs(p / exact - 1.0)))
     assert errs[2] < 1e-4
     assert errs[0] / errs[1] > 3.0 and errs[1] / errs[2] > 3.0
+
+
+# --- the unsmoothed nozzle, as the CFD cases and the leakage analysis use it ---------------
+
+R_AIR, GAMMA = 287.05, 1.4
+
+
+def test_choked_nozzle_flux_is_the_textbook_value():
+    # Air, gamma 1.4: m'' = 0.6847 p0 / sqrt(R T0) at and below the critical ratio 0.5283.
+    p0, T0 = 3e5, 300.0
+    expected = 0.68473 * p0 / math.sqrt(R_AIR * T0)
+    for p in (0.5283 * p0, 0.3 * p0, 0.0):
+        assert flows.isentropic_mass_flux(p0, T0, p, GAMMA, R_AIR) == pytest.approx(
+            expected, rel=1e-4)  # 5 significant digits of the textbook constant
+    assert flows.isentropic_mass_flux(p0, T0, p0, GAMMA, R_AIR) == 0.0
+
+
+def test_nozzle_flux_at_low_pressure_drop_is_bernoulli():
+    p0, T0, dp = 1e5, 300.0, 10.0
+    rho = p0 / (R_AIR * T0)
+    bernoulli = rho * math.sqrt(2 * dp / rho)
+    # Compressibility corrections are O(dp/p0) = 1e-4.
+    assert flows.isentropic_mass_flux(p0, T0, p0 - dp, GAMMA, R_AIR) == pytest.approx(
+        bernoulli, rel=3e-4)

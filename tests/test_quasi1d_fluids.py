@@ -1,4 +1,5 @@
-"""Dry air with cp(T) (ThermallyPerfectGas) against CoolProp and against its own calculus.
+"""Dry air with cp(T) (ThermallyPerfectGas) against CoolProp and against its own calculus;
+the one perfect gas against the CFD recordings.
 
 The closed forms u(T), h(T), s0(T) are integrals of cp(T); the tests differentiate them
 numerically, so a wrong integration constant-free term shows.  The chamber equations read
@@ -7,11 +8,16 @@ T, kappa and 1/cv from a table in u: checked against the Newton inverse.
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import CoolProp.CoolProp as CP
 import numpy as np
 import pytest
 
-from rotorflow.quasi1d.fluids import IdealGas, dry_air
+from rotorflow.quasi1d.fluids import PerfectGas, dry_air, make_fluid
+from rotorflow.quasi1d.perfect_gas import R_UNIVERSAL
+from rotorflow.quasi1d.settings import Operating
 
 AIR = dry_air()
 
@@ -68,7 +74,8 @@ def test_pressure_derivatives_match_finite_differences():
     assert np.allclose(pu, rho * AIR.R / AIR.cv(T), rtol=1e-6)
 
 
-@pytest.mark.parametrize("gas", [AIR, IdealGas(R=287.0, cp=1004.5)], ids=["cp(T)", "perfect"])
+@pytest.mark.parametrize("gas", [AIR, PerfectGas.from_gas_constant(287.0, 1004.5)],
+                         ids=["cp(T)", "perfect"])
 def test_isentropic_blowdown_and_constant_volume_fill(gas):
     rho, p1, p2, V = 8.0, 9e5, 6e5, 2e-5
     u = gas.state_pT(p1, p1 / (rho * gas.R))[1]
@@ -86,3 +93,38 @@ def test_isentropic_blowdown_and_constant_volume_fill(gas):
     assert gas.props(m2 / V, U2 / m2)[0][0] == pytest.approx(12e5, rel=1e-6)
     assert U2[0] - U[0] == pytest.approx((m2[0] - m[0]) * h_in, rel=1e-12)
     assert m2[0] > m[0]
+
+
+# --- the one perfect gas ------------------------------------------------------------------
+
+DATA = Path(__file__).resolve().parent / "data" / "cfd"
+
+
+def test_perfect_gas_reproduces_the_recorded_cfd_gases_exactly():
+    # The chamber case recorded its gas (fields), R and gamma; the channel study recorded
+    # R and gamma of the gap cases' constant-viscosity air.  One R_UNIVERSAL gives the
+    # same doubles (rtol 0: the CFD dictionaries must not change by a bit).
+    desc = json.loads((DATA / "chamber" / "leaking" / "case.json").read_text())
+    gas = PerfectGas(**desc["gas"])
+    assert (gas.R, gas.gamma) == (desc["R_J_kgK"], desc["gamma"])
+    channel = json.loads((DATA / "channel_study.json").read_text())
+    gas = PerfectGas(transport="const")
+    assert (gas.R, gas.gamma, gas.mu(300.0)) == (channel["R_J_kgK"], channel["gamma"],
+                                                 channel["mu_Pa_s"])
+    # R = R_UNIVERSAL / M with M in kg/mol, and R gives back its gas.
+    assert gas.R == pytest.approx(R_UNIVERSAL / (1e-3 * gas.molar_mass_kg_kmol), rel=1e-15)
+    assert PerfectGas.from_gas_constant(gas.R, gas.cp_J_kgK).R == pytest.approx(gas.R,
+                                                                               rel=1e-15)
+
+
+def test_the_constant_cp_fluid_is_the_cfd_chamber_gas():
+    # heat_capacity "constant": the quasi-1D model's fluid and the chamber CFD case's gas
+    # are one object, built from [operating] in one place.
+    op = Operating.from_section({"p_suction_bar": 1.0, "p_discharge_bar": 3.0,
+                                 "T_suction_K": 300.0, "speed_rpm": 3000.0,
+                                 "heat_capacity": "constant"}, "case.toml")
+    fluid = make_fluid(op, 3.0)
+    assert isinstance(fluid, PerfectGas) and fluid == op.constant_cp_gas
+    assert fluid.R == op.R_J_kgK
+    # Sutherland's law: air at 300 K, 1.846e-5 Pa s in the tables (4 digits: rel 1e-3).
+    assert fluid.mu(300.0) == pytest.approx(1.846e-5, rel=1e-3)

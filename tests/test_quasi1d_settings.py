@@ -92,7 +92,7 @@ def test_missing_table_and_impossible_ports():
 
 
 def test_air_is_dry_air_with_cp_of_t_unless_a_constant_cp_is_given():
-    from rotorflow.quasi1d.fluids import IdealGas, ThermallyPerfectGas, make_fluid
+    from rotorflow.quasi1d.fluids import PerfectGas, ThermallyPerfectGas, make_fluid
 
     op = Operating.from_section(_op(), "case.toml")
     assert op.heat_capacity == "temperature"
@@ -102,7 +102,7 @@ def test_air_is_dry_air_with_cp_of_t_unless_a_constant_cp_is_given():
         op = Operating.from_section(_op(**extra), "case.toml")
         assert op.heat_capacity == "constant"
         gas = make_fluid(op, 4.6)
-        assert isinstance(gas, IdealGas) and gas.cp == op.cp_J_kgK
+        assert isinstance(gas, PerfectGas) and gas.cp_J_kgK == op.cp_J_kgK
 
 
 def test_ideal_gas_needs_cp_above_R():

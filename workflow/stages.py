@@ -282,9 +282,11 @@ register(Stage(
     # Runs are reused point by point through [cfd] runs_dir.
     reads=("cfd", "machine", "sweep", "operating.speed_rpm", "operating.driven",
            "operating.volume_ratio"),
-    code=("rotorflow.cases", "rotorflow.postprocess.leakage", "rotorflow.quasi1d.flows",
+    code=("rotorflow.cases", "rotorflow.postprocess.leakage",
+          "rotorflow.postprocess.leakage_report", "rotorflow.quasi1d.flows",
+          "rotorflow.quasi1d.calibrated", "rotorflow.quasi1d.perfect_gas",
           "rotorflow.geometry.internal_gear", "rotorflow.geometry.curves"),
-    report="rotorflow.postprocess.leakage:report_section",
+    report="rotorflow.postprocess.leakage_report:report_section",
     report_rank=60,
     missing=_has_cfd,
     default=lambda raw: "cfd" in raw,

@@ -4,7 +4,7 @@ DXF) and point clouds with normals (written as CSV, PLY).
 * Profiles: the rotor's transverse section at the low-pressure face (z = 0) in the
   rotor's own frame (origin on its axis, at rotor angle 0), clearance included, as a
   closed polyline whose vertices lie on the analytic curve and whose chords deviate
-  from it by at most the tolerance (:func:`profile_curves.sample`), i.e. reduced to the
+  from it by at most the tolerance (:func:`..curves.sample`), i.e. reduced to the
   tolerance.  CSV: ``x_<unit>,y_<unit>``, the first point repeated at the end.  DXF: an
   ASCII R12 file with one closed POLYLINE (layer PROFILE); the outer rotor's file adds
   its outside circle (layer BORE).

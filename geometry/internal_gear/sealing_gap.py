@@ -2,7 +2,7 @@
 
 At outer-rotor angle ``phi1`` the leading pin (pin 0) of the chamber space touches the
 inner rotor.  In a real machine one rotor is relieved by a clearance ``gap``: its profile
-is offset along its own normal (a true normal offset, :func:`.profile_curves.offset_profile`,
+is offset along its own normal (a true normal offset, :func:`..curves.offset_profile`,
 not a shift), into the outer rotor by default, as for the solids (``clearance_on``).  The
 section is written in the gap's own frame: origin at the contact point of the conjugate
 (unrelieved) pair, y along the contact normal (from the inner rotor into the pin), x along
@@ -41,7 +41,7 @@ from .profiles import inner_profile, outer_profile
 from .space import PinSpace
 
 #: Parameter span searched on each side of the contact on the inner profile, in lobes
-#: (u of :func:`.profile_curves.inner_profile`): half a lobe, so both ways reach past
+#: (u of :func:`.profiles.inner_profile`): half a lobe, so both ways reach past
 #: the tip and past the zero-speed point of sigma_bar = 1, where little arc length
 #: is spread over a wide range of parameter.
 INNER_SPAN = 0.5

@@ -26,6 +26,7 @@ from foamlib import FoamFile
 
 from rotorflow.cases import foam, gap_case, gap_mesh, gap_study
 from rotorflow.errors import ExternalRunError
+from rotorflow.quasi1d.perfect_gas import PerfectGas
 
 HERE = Path(__file__).resolve().parent
 
@@ -39,7 +40,7 @@ CHANNEL = {"gap_m": 10e-6, "length_m": 1e-3, "p_total_Pa": 1.005e5, "p_exit_Pa":
 def channel_case() -> gap_case.GapCase:
     c = CHANNEL
     flow = gap_case.GapFlow(p_total_Pa=c["p_total_Pa"], T_total_K=c["T_total_K"],
-                            p_exit_Pa=c["p_exit_Pa"], gas=gap_case.Air(transport="const"))
+                            p_exit_Pa=c["p_exit_Pa"], gas=PerfectGas(transport="const"))
     mesh = gap_mesh.GapMeshSpec(cells_across=c["cells_across"], cells_along=c["cells_along"])
     return gap_case.GapCase(gap_mesh.parallel_channel(c["gap_m"], c["length_m"]), flow, mesh)
 

@@ -3,7 +3,7 @@
     .venv/bin/python tests/data/cfd/chamber/record.py      (needs OpenFOAM; about 1 min)
 
 Writes, next to this file:
-    leaking/        the default case's chamber (cases/default.toml: 20 um gap, 3000 rpm)
+    leaking/        the default case's chamber (examples/default.toml: 20 um gap, 3000 rpm)
                     through its compression phase, default mesh: case.json, result.json
                     and the function-object tables, sampled every 2 deg
     sealed/         the same chamber with the gap closed (the adiabatic-compression check)
@@ -28,8 +28,8 @@ from pathlib import Path
 from rotorflow.cases import chamber_case
 from rotorflow.geometry.summary import chamber_table
 from rotorflow.postprocess import chamber_compare
-from rotorflow.postprocess.leakage import FlowCoefficientFit
 from rotorflow.quasi1d import Leakage, Operating
+from rotorflow.quasi1d.calibrated import FlowCoefficientFit
 from rotorflow.workflow.case import load_case
 
 HERE = Path(__file__).resolve().parent
@@ -45,13 +45,13 @@ TABLES = {"chamberAverage": "volFieldValue.dat", "chamberIntegral": "volFieldVal
 
 
 def default_leakage() -> Leakage:
-    case = load_case(REPO / "cases" / "default.toml")
-    return Leakage.from_section(case.raw["leakage"], "cases/default.toml")
+    case = load_case(REPO / "examples" / "default.toml")
+    return Leakage.from_section(case.raw["leakage"], "examples/default.toml")
 
 
 def recorded_case(sealed: bool = False) -> chamber_case.ChamberCase:
-    case = load_case(REPO / "cases" / "default.toml")
-    where = "cases/default.toml"
+    case = load_case(REPO / "examples" / "default.toml")
+    where = "examples/default.toml"
     comp = chamber_case.compression_from_table(
         chamber_table(case), Operating.from_section(case.raw["operating"], where),
         default_leakage(), samples_per_deg=SAMPLES_PER_DEG)

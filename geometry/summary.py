@@ -8,7 +8,7 @@ import numpy as np
 
 from .forces import power_split
 from .machine import InternalGearMachine
-from .table import ChamberTable
+from .table import ChamberTable, internal_gear_paths
 
 
 def build_machine(case, points_per_period: int | None = None) -> InternalGearMachine:
@@ -84,6 +84,7 @@ def chamber_table(case, machine: InternalGearMachine | None = None) -> ChamberTa
     ratio = {"inner": pair.lobes_inner / pair.lobes_outer, "outer": 1.0}
     driven = case.driven if case.driven != "auto" else power_split(m, case.volume_ratio).driven
     lines = m.seal_lines
+    far = {d: v for d, v in lines.items() if abs(d) >= 2}
     zero = np.zeros_like(cur.phi)
     return ChamberTable(
         angle_rad=cur.phi - cur.phi[0],
@@ -100,5 +101,6 @@ def chamber_table(case, machine: InternalGearMachine | None = None) -> ChamberTa
         speed_ratio_outer_per_driven=ratio[driven],
         length_m=m.sweep.length,
         diameter_m=pair.diameter,
-        seal_far={d: v for d, v in lines.items() if abs(d) >= 2},
+        seal_far=far,
+        leakage_paths=internal_gear_paths(far),
     )

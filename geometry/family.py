@@ -20,6 +20,9 @@ quasi-1D model and the CFD cases read only that object.  What a pair offers:
   at a contact, for the CFD gap cases.
 * ``figures()``, ``contact_table(step_deg)``, ``digest()``: the family's own figures, its
   contact points against angle, a short identity for run folders.
+* ``leakage_paths(far_lines)``: the named leakage paths its chamber table declares
+  (kind, neighbour or plenum, column, own clearance), which the quasi-1D model builds its
+  flow network from.
 
 A registry maps ``[machine] type`` to a :class:`Family`; :func:`family_for` fails with
 one line that lists the known types.
@@ -104,6 +107,11 @@ class RotorPair(ABC):
 
     @abstractmethod
     def digest(self) -> str: ...
+
+    @abstractmethod
+    def leakage_paths(self, far_lines: dict[int, np.ndarray]) -> tuple:
+        """The chamber table's leakage paths (:class:`~.table.LeakagePath`), given the
+        sealing lines to chambers two or more periods away that the sweep found."""
 
     def rotor(self, name: str) -> Rotor:
         for r in self.rotors:

@@ -79,6 +79,7 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     # the lobe counts (exact for gearing, N_driven / N_reference).
     ratio = pair.rotor(driven).lobes / pair.rotors[0].lobes
     lines = m.seal_lines
+    far = {d: v for d, v in lines.items() if abs(d) >= 2}
     zero = np.zeros_like(cur.phi)
     return ChamberTable(
         angle_rad=cur.phi - cur.phi[0],
@@ -94,6 +95,7 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
         speed_ratio_outer_per_driven=ratio,
         length_m=m.sweep.length,
         diameter_m=pair.diameter,
-        seal_far={d: v for d, v in lines.items() if abs(d) >= 2},
+        seal_far=far,
         machine=pair.family,
+        leakage_paths=pair.leakage_paths(far),
     )

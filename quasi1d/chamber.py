@@ -26,16 +26,16 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-# Rows of ChamberGeometry.coef: Hermite coefficients of V, then (value, slope) of the
-# linearly interpolated columns.
-LINEAR_COLUMNS = ("area_lp_m2", "area_hp_m2", "seal_next_m", "seal_prev_m",
-                  "seal_lp_face_m", "seal_hp_face_m")
+# The first rows of ChamberGeometry.columns: the port areas.  The rows after them are the
+# columns the declared leakage paths read, in the order of the declarations.
+PORT_COLUMNS = ("area_lp_m2", "area_hp_m2")
+ROW_AREA_LP, ROW_AREA_HP = 0, 1
 
 
 @dataclass(frozen=True)
 class ChamberGeometry:
     nodes: np.ndarray = field(repr=False)  # angle_rad of the table
-    coef: np.ndarray = field(repr=False)  # (4 + 2*6, n_nodes - 1)
+    coef: np.ndarray = field(repr=False)  # (4 + 2 * len(columns), n_nodes - 1)
     period: float
     lobes: int
     v_max: float
@@ -47,19 +47,16 @@ class ChamberGeometry:
     v_discharge: float  # volume at discharge opening
     omega_outer: float  # rad/s
     radius: float  # outer-rotor radius, for the wall speed in the gaps
-    far_offsets: tuple[int, ...] = ()  # rows 6.. of ``lin``: lines to chambers |d| >= 2 away
+    columns: tuple[str, ...] = PORT_COLUMNS  # rows of ``lin``: table column names
+    paths: tuple = ()  # the table's LeakagePath declarations
 
-    def row_of(self, offset: int) -> int:
-        """Row of ``lin`` holding the sealing line to the chamber ``offset`` periods older."""
-        if offset == 1:
-            return 2
-        if offset == -1:
-            return 3
-        return len(LINEAR_COLUMNS) + self.far_offsets.index(offset)
+    def row(self, column: str) -> int:
+        """Row of ``lin`` holding the table column ``column``."""
+        return self.columns.index(column)
 
     @property
     def rows(self) -> int:
-        return len(LINEAR_COLUMNS) + len(self.far_offsets)
+        return len(self.columns)
 
     @property
     def slots(self) -> int:
@@ -90,10 +87,11 @@ def prepare(table, volume_ratio, suction_close, discharge_open, speed_rpm,
         raise CaseError("chamber table has fewer than 4 rows")
     if not np.all(np.diff(a) > 0):
         raise CaseError("chamber table angles must increase strictly")
-    far = tuple(sorted(getattr(table, "seal_far", {}), key=lambda d: (abs(d), -d)))
-    cols = [np.asarray(getattr(table, c), dtype=float) for c in LINEAR_COLUMNS]
-    cols += [np.asarray(table.seal_far[d], dtype=float) for d in far]
-    names = (*LINEAR_COLUMNS, *(f"seal to chamber {d:+d}" for d in far))
+    paths = _declared_paths(table)
+    names = list(PORT_COLUMNS)
+    for path in paths:
+        names += [c for c in path.columns if c not in names]
+    cols = [_column(table, name) for name in names]
     for name, col in zip(("volume_m3", "dVdangle_m3_rad", *names), [V, dV, *cols],
                          strict=True):
         if col.shape != a.shape or not np.all(np.isfinite(col)):
@@ -145,7 +143,24 @@ def prepare(table, volume_ratio, suction_close, discharge_open, speed_rpm,
     omega = 2.0 * math.pi * speed_rpm / 60.0 * table.speed_ratio_outer_per_driven
     return ChamberGeometry(a, coef, period, table.lobes_outer, vmax, birth, death, sc, do,
                            float(geo.volume(sc)), float(geo.volume(do)), omega,
-                           0.5 * float(table.diameter_m), far)
+                           0.5 * float(table.diameter_m), tuple(names), paths)
+
+
+def _declared_paths(table) -> tuple:
+    """The table's leakage paths (an object without declarations: the internal-gear set)."""
+    from rotorflow.geometry.table import internal_gear_paths
+
+    paths = getattr(table, "paths", None)
+    return internal_gear_paths(getattr(table, "seal_far", {})) if paths is None else paths
+
+
+def _column(table, name: str) -> np.ndarray:
+    try:
+        col = table.column(name) if hasattr(table, "column") else getattr(table, name)
+    except (KeyError, AttributeError):
+        raise CaseError(f"chamber table has no column {name}, which a declared leakage "
+                        "path reads") from None
+    return np.asarray(col, dtype=float)
 
 
 def _crossing(geo, a, V, level, i0, i1) -> float:

@@ -25,19 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .integrate import IntegrationError, PeriodRun, integrate_period
-from .model import (
-    ACC_H_DIS,
-    ACC_H_SUC,
-    ACC_M_DIS,
-    ACC_M_SUC,
-    ACC_OIL_H_IN,
-    ACC_OIL_H_OUT,
-    ACC_OIL_M_IN,
-    ACC_OIL_M_OUT,
-    ACC_Q,
-    ACC_W,
-    ChamberModel,
-)
+from .model import ChamberModel
+from .network import ACC_H_DIS, ACC_H_SUC, ACC_M_DIS, ACC_M_SUC, ACC_Q, ACC_W
 from .settings import Numerics
 
 # Once p, T and the balances change by less than this between periods, the period's step
@@ -73,13 +62,14 @@ def balances(model: ChamberModel, y_start: np.ndarray, y_end: np.ndarray):
     """Mass and energy closure of one period and the conservation residuals."""
     n, nv = model.n, model.nv
     a = y_end[nv * n:]
+    c = model.acc_cols
     m_ref = model.suc.rho * model.geo.v_trapped
     e_ref = model.suc.p * model.geo.v_trapped
     throughput = max(abs(a[ACC_M_SUC]), m_ref)
     work = max(abs(a[ACC_W]), e_ref)
-    m_in, m_out = a[ACC_M_SUC] + a[ACC_OIL_M_IN], a[ACC_M_DIS] + a[ACC_OIL_M_OUT]
-    e_in = a[ACC_H_SUC] + a[ACC_W] + a[ACC_Q] + a[ACC_OIL_H_IN]
-    e_out = a[ACC_H_DIS] + a[ACC_OIL_H_OUT]
+    m_in, m_out = a[ACC_M_SUC] + a[c.oil_m_in], a[ACC_M_DIS] + a[c.oil_m_out]
+    e_in = a[ACC_H_SUC] + a[ACC_W] + a[ACC_Q] + a[c.oil_h_in]
+    e_out = a[ACC_H_DIS] + a[c.oil_h_out]
     stored_m0 = y_start[:n].sum() + (y_start[2 * n:3 * n].sum() if nv == 4 else 0.0)
     stored_m1 = y_end[:n].sum() + (y_end[2 * n:3 * n].sum() if nv == 4 else 0.0)
     stored_e0 = y_start[n:2 * n].sum() + (y_start[3 * n:4 * n].sum() if nv == 4 else 0.0)

@@ -12,8 +12,11 @@ Definitions (per lobe period = one chamber's cycle, t_P = period / omega_outer):
     adiabatic_efficiency        mass flow * isentropic work (p_suc, T_suc -> p_dis) / power
     isothermal_efficiency       mass flow * isothermal work at T_suc / power
     discharge_temperature_K     temperature of the delivered gas at its mean enthalpy
-    leakage_kg_s                gross flow (|mdot| integrated) per path: between chambers,
-                                across the low- and the high-pressure end face
+    leakage_kg_s                gross flow (|mdot| integrated) per report key of the
+                                chamber table's leakage paths (a path's name unless it
+                                declares a key); the internal gear's: "interlobe" (every
+                                sealing line between chambers), "lp_face" and "hp_face"
+                                (across the low- and the high-pressure end face)
 
 Figures that are undefined (no net delivery) are None so that the JSON stays valid.
 """
@@ -23,17 +26,7 @@ from __future__ import annotations
 import math
 
 from .cycle import CycleSolution
-from .model import (
-    ACC_H_DIS,
-    ACC_L_HP,
-    ACC_L_INT,
-    ACC_L_LP,
-    ACC_M_DIS,
-    ACC_M_SUC,
-    ACC_OIL_M_IN,
-    ACC_Q,
-    ACC_W,
-)
+from .network import ACC_H_DIS, ACC_M_DIS, ACC_M_SUC, ACC_Q, ACC_W
 
 
 def figures(sol: CycleSolution) -> dict:
@@ -65,12 +58,9 @@ def figures(sol: CycleSolution) -> dict:
         "isothermal_efficiency": ratio(mdot * w_it, power),
         "discharge_temperature_K": T_dis,
         "heat_to_gas_W": float(a[ACC_Q] / t_period),
-        "oil_flow_kg_s": float(a[ACC_OIL_M_IN] / t_period),
-        "leakage_kg_s": {
-            "interlobe": float(a[ACC_L_INT] / t_period),
-            "lp_face": float(a[ACC_L_LP] / t_period),
-            "hp_face": float(a[ACC_L_HP] / t_period),
-        },
+        "oil_flow_kg_s": float(a[model.acc_cols.oil_m_in] / t_period),
+        "leakage_kg_s": {key: float(a[model.acc_cols.leak(key)] / t_period)
+                         for key in model.acc_cols.leak_keys},
         "cycles": int(sol.cycles),
         "converged": bool(sol.converged),
         "mass_balance_error": float(sol.mass_closure),

@@ -266,6 +266,23 @@ class Leakage:
     from the upstream side) goes into the correlation and no separate Couette term is
     added; at equal pressures the flow is the fit's drag flow, about w rho U h.  A fit
     without a wall term (w = 0) keeps the separate Couette term.
+
+    Paths.  The chamber table declares the leakage paths (interlobe lines, end faces,
+    and a family's tips, blow-holes, ...; see :mod:`rotorflow.geometry.table`).  These
+    settings hold for every path; a sub-table overrides them for one kind of path or one
+    named path, with the keys gap_um, model, coefficient, zeta, land_mm, correlation::
+
+        [leakage.end-face]              # kinds: interlobe, tip, blow-hole, end-face, port
+        gap_um = 40
+        [leakage.paths."interlobe+2"]   # a path by the name the chamber table gives it
+        model = "none"
+
+    The most specific setting wins: the named path's, the kind's, the table's own
+    declaration (its gap and model), then this section's.  ``model = "none"`` here seals
+    every path the case file does not open in a sub-table.  ``wall_motion`` and
+    ``viscosity_Pa_s`` hold for all paths.  An unknown key, or a kind or path name the
+    chamber table does not declare, is an error naming it and the file (the names are
+    checked against the table when the model is built: :mod:`rotorflow.quasi1d.paths`).
     """
 
     gap_m: float = 0.0
@@ -278,14 +295,19 @@ class Leakage:
     correlation: object = None  # a quasi1d.calibrated.FlowCoefficientFit
     land_m: float = 1.0e-3
     viscosity_Pa_s: float = 1.8e-5  # air near 300 K
+    # Overrides, as ((kind or path name, paths.PathSettings), ...) in the file's order
+    by_kind: tuple = ()
+    by_path: tuple = ()
 
     KEYS = ("gap_um", "model", "coefficient", "zeta", "wall_motion", "correlation", "land_mm",
             "viscosity_Pa_s")
 
     @classmethod
     def from_section(cls, d: dict, where: str = "the case") -> Leakage:
+        from .paths import OVERRIDE_SECTIONS, read_overrides
+
         s = "leakage"
-        _check_keys(d, cls.KEYS, s, where)
+        _check_keys(d, cls.KEYS + OVERRIDE_SECTIONS, s, where)
         model = _choice(d, "model", s, where, LEAKAGE_MODELS, "nozzle")
         gap = _number(d, "gap_um", s, where, 0.0 if model == "none" else None, nonnegative=True)
         if model != "none" and gap <= 0:
@@ -297,6 +319,7 @@ class Leakage:
         elif "correlation" in d:
             raise CaseError(f"key 'correlation' in [{s}] of {where} needs model "
                             '"cfd-calibrated"')
+        by_kind, by_path = read_overrides(d, where, model, fit)
         return cls(
             gap_m=gap * 1e-6,
             model=model,
@@ -306,6 +329,8 @@ class Leakage:
             correlation=fit,
             land_m=_number(d, "land_mm", s, where, 1.0, positive=True) * 1e-3,
             viscosity_Pa_s=_number(d, "viscosity_Pa_s", s, where, 1.8e-5, positive=True),
+            by_kind=tuple(by_kind.items()),
+            by_path=tuple(by_path.items()),
         )
 
 

@@ -10,7 +10,9 @@ has length g(a) = seal * sin(pi (a + period) / (life + period)), positive over t
 whole span in which either chamber exists, so seal_next(a) = g(a) and seal_prev(a) =
 g(a - period) describe the same line from both sides.  The end-face sealing lengths are
 smooth bumps: on the low-pressure plate from the volume maximum to mid-compression, on
-the high-pressure plate from the maximum to death.
+the high-pressure plate from the maximum to death.  The table declares the internal
+gear's leakage paths (interlobe+1, lp-face, hp-face); a test that wants other paths
+replaces ``leakage_paths`` and adds its ``columns`` (dataclasses.replace).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import math
 
 import numpy as np
 
-from rotorflow.geometry.table import ChamberTable
+from rotorflow.geometry.table import ChamberTable, internal_gear_paths
 
 CRC60_ANGLE_MAX = math.radians(220.0)  # seed 001, section 2.1
 CRC60_LIFE = math.radians(907.0)
@@ -65,6 +67,7 @@ def sin2_table(v_max=30e-6, lobes=3, angle_max=CRC60_ANGLE_MAX, life=CRC60_LIFE,
         length_m=length,
         diameter_m=diameter,
         machine="synthetic",
+        leakage_paths=internal_gear_paths(),
     )
 
 

@@ -369,3 +369,10 @@ class PinGerotor(RotorPair):
         text = repr((self.lobes_outer, self.lam, self.sigma, self.diameter, self.fillet_kind,
                      self.fillet_apex_diameter))
         return hashlib.sha256(text.encode()).hexdigest()[:8]
+
+    def leakage_paths(self, far_lines) -> tuple:
+        """Interlobe lines to +-1 and every farther neighbour found, end faces to suction
+        (low-pressure face) and discharge (high-pressure face)."""
+        from ..table import internal_gear_paths
+
+        return internal_gear_paths(far_lines)

@@ -1,0 +1,118 @@
+"""What happens to the slot states at the events of a lobe period, and the states that
+start and continue the cycle.
+
+Birth: the chamber appears with the suction gas filling its volume (mass, enthalpy and
+the suction's p V booked); death: it is handed over to the discharge plenum with its
+mass, energy and p V; suction close: with oil injection the oil enters with the trapped
+gas; discharge open with ideal ports: the chamber is brought to the discharge pressure at
+once.  A period's end state becomes the next period's start by shifting the slots.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .network import ACC_H_DIS, ACC_H_SUC, ACC_M_DIS, ACC_M_SUC, ACC_W
+
+
+def apply_event(model, kind: str, k: int, theta: float, y: np.ndarray) -> None:
+    """Apply one event to a batch of states (B, n_state) in place."""
+    n, geo, c = model.n, model.geo, model.acc_cols
+    acc = y[:, model.nv * n:]
+    age = theta + k * geo.period
+    V = float(geo.volume(age))
+    if kind == "birth":
+        m = model.suc.rho * V
+        y[:, k] = m
+        y[:, n + k] = m * model.suc.u
+        acc[:, ACC_M_SUC] += m
+        acc[:, ACC_H_SUC] += m * model.suc.h
+        acc[:, ACC_W] -= model.suc.p * V
+        if model.oil:
+            y[:, 2 * n + k] = 0.0
+            y[:, 3 * n + k] = 0.0
+    elif kind == "death":
+        m = y[:, k].copy()
+        U = y[:, n + k].copy()
+        p, _, _ = model.fluid.props(m / V, U / m)
+        acc[:, ACC_M_DIS] += m
+        acc[:, ACC_H_DIS] += U + p * V
+        acc[:, ACC_W] += p * V
+        y[:, k] = 0.0
+        y[:, n + k] = 0.0
+        if model.oil:
+            acc[:, c.oil_m_out] += y[:, 2 * n + k]
+            acc[:, c.oil_h_out] += y[:, 3 * n + k]
+            y[:, 2 * n + k] = 0.0
+            y[:, 3 * n + k] = 0.0
+    elif kind == "close" and model.oil:
+        mo = model.op.oil_mass_ratio * y[:, k]
+        ho = mo * model.op.oil_cp_J_kgK * model.op.oil_temperature_K
+        y[:, 2 * n + k] += mo
+        y[:, 3 * n + k] += ho
+        acc[:, c.oil_m_in] += mo
+        acc[:, c.oil_h_in] += ho
+    elif kind == "open" and model.ports.model == "ideal":
+        _equalise(model, k, V, y, acc)
+
+
+def _equalise(model, k, V, y, acc):
+    """Ideal discharge port opening: bring the chamber to the discharge pressure at once."""
+    n, fl, pd = model.n, model.fluid, model.dis.p
+    m = y[:, k].copy()
+    U = y[:, n + k].copy()
+    rho = m / V
+    u = U / m
+    p, _, _ = fl.props(rho, u)
+    m2 = m.copy()
+    U2 = U.copy()
+    over = p > pd * (1 + 1e-12)
+    under = p < pd * (1 - 1e-12)
+    if np.any(over):
+        r2, u2 = fl.isentropic(rho[over], u[over], pd)
+        m2[over] = r2 * V
+        U2[over] = m2[over] * u2
+    if np.any(under):
+        m2[under], U2[under] = fl.fill(m[under], U[under], V, model.dis.h, pd)
+    y[:, k] = m2
+    y[:, n + k] = U2
+    acc[:, ACC_M_DIS] += m - m2
+    acc[:, ACC_H_DIS] += U - U2
+
+
+def initial_state(model) -> np.ndarray:
+    """Start of a period with the no-leakage adiabatic cycle as the guess (slot 0 empty)."""
+    n, geo, fl = model.n, model.geo, model.fluid
+    y = np.zeros(model.n_state)
+    kap = model.suc.kappa
+    m_trap = model.suc.rho * geo.v_trapped
+    for k in range(1, n):
+        age = geo.birth + k * geo.period
+        if age > geo.death:
+            continue
+        V = float(geo.volume(age))
+        if age < geo.suction_close:
+            rho, p = model.suc.rho, model.suc.p
+        elif age < geo.discharge_open:
+            rho = m_trap / V
+            p = model.suc.p * (rho / model.suc.rho) ** kap
+        else:  # any working port keeps the chamber near the discharge pressure
+            p = model.dis.p
+            rho = model.suc.rho * (p / model.suc.p) ** (1.0 / kap)
+        u = fl.u_from_rho_p(rho, p)
+        y[k] = rho * V
+        y[n + k] = rho * V * u
+        if model.oil and age >= geo.suction_close:
+            mo = model.op.oil_mass_ratio * m_trap
+            y[2 * n + k] = mo
+            y[3 * n + k] = mo * model.op.oil_cp_J_kgK * model.op.T_suction_K
+    return y
+
+
+def shift(model, y_end: np.ndarray) -> np.ndarray:
+    """State at the start of the next period: slot k -> k+1, slot 0 empty, sums reset."""
+    y = np.zeros_like(y_end)
+    n = model.n
+    for b in range(model.nv):
+        y[..., b * n + 1:(b + 1) * n] = y_end[..., b * n:(b + 1) * n - 1]
+    return y

@@ -121,8 +121,10 @@ def known_keys(section: str) -> set[str] | None:
     """Keys a case section accepts (None: not known here, so not checked)."""
     from . import case as c
 
-    if section == "machine":
-        return set(c.MACHINE_KEYS)
+    if section == "machine":  # the base case's family checks its own when each point loads
+        from rotorflow.geometry.family import families
+
+        return set(c.MACHINE_KEYS).union(*(f.keys for f in families().values()))
     if section == "sweep":
         return set(c.SWEEP_KEYS)
     if section in ("operating", "leakage", "ports", "numerics"):
@@ -131,10 +133,8 @@ def known_keys(section: str) -> set[str] | None:
         keys = set(getattr(settings, section.capitalize()).KEYS)
         return keys | c.OPERATING_GEOMETRY_KEYS if section == "operating" else keys
     if section == "export":
-        try:
-            from rotorflow.geometry import export_settings
-        except ImportError:
-            return None
+        from rotorflow.geometry.export import settings as export_settings
+
         return set(export_settings.KEYS)
     return None
 

@@ -51,7 +51,8 @@ def _offscreen():
     return pv
 
 
-def _surfaces(case, wrap_outer_deg: float):
+def _surfaces(case, wrap_outer_deg: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Flank points (nz, nu, 3) and axis of each rotor, outer first."""
     from rotorflow.geometry.curves import sample
     from rotorflow.geometry.export.surface import SweptSurface
     from rotorflow.geometry.sweep import Sweep
@@ -68,8 +69,8 @@ def _surfaces(case, wrap_outer_deg: float):
         u = sample(prof, PROFILE_TOL * d, PROFILE_STEP * d)
         surf = SweptSurface(prof, sweep, 0.0, omega, centre)
         pts = surf.point(u[None, :], z[:, None])  # (nz, nu, 3)
-        out.append((prof.name, pts, np.array(centre)))
-    return out, sweep
+        out.append((pts, np.array(centre)))
+    return out
 
 
 def _flank(pv, pts):
@@ -98,6 +99,14 @@ def _strip(pv, inner_ring, outer_ring):
     return pv.PolyData(pts, faces)
 
 
+def _cap(pv, ring, centre):
+    """Face closing a ring: a fan from ``centre`` where the ring is star-shaped about it,
+    else VTK's triangulation of the polygon."""
+    if _star_shaped(ring, centre):
+        return _fan(pv, ring, centre)
+    return pv.PolyData(ring, np.r_[len(ring), np.arange(len(ring))]).triangulate()
+
+
 def _bore_ring(ring, centre, radius):
     """Points on the bore circle at the polar angles of the ring's points."""
     a = np.arctan2(ring[:, 1] - centre[1], ring[:, 0] - centre[0])
@@ -114,12 +123,19 @@ def render_case(case, folder: Path, wrap_outer_deg: float) -> list[Path]:
     """Write rotors.png and section.png for ``case`` into ``folder``; their paths."""
     pv = _offscreen()
     folder = Path(folder)
-    (oname, opts, oc), (iname, ipts, ic) = _surfaces(case, wrap_outer_deg)[0]
-    d = case.pair.diameter
-    bore = 0.5 * BORE_RATIO * d
-    scale_z = case.scale_end if case.sweep_kind == "conical" else 1.0
+    outer, inner = _surfaces(case, wrap_outer_deg)
+    files = [_rotors_picture(pv, case, outer, inner, wrap_outer_deg, folder / "rotors.png"),
+             _section_picture(pv, case, outer, inner, folder / "section.png")]
+    log.info("rendered %s", ", ".join(p.name for p in files))
+    return files
 
-    # ------------------------------------------------------------- 3D rotors
+
+def _rotor_meshes(pv, case, outer, inner):
+    """The outer rotor in its bore, cut open towards the camera, and the inner rotor with
+    its end faces."""
+    (opts, oc), (ipts, ic) = outer, inner
+    bore = 0.5 * BORE_RATIO * case.pair.diameter
+    scale_z = case.scale_end if case.sweep_kind == "conical" else 1.0
     outer_parts = [_flank(pv, opts)]
     o0, o1 = opts[0], opts[-1]
     if _star_shaped(o0, oc):
@@ -134,21 +150,23 @@ def render_case(case, folder: Path, wrap_outer_deg: float) -> list[Path]:
         cone.points = p
     outer_parts.append(cone.extract_surface(algorithm="dataset_surface"))
     # Cut away the half facing the camera so that the inner rotor shows.
-    outer = pv.merge(outer_parts).clip(normal=CAMERA_DIRECTION, origin=(0.0, 0.0, 0.0))
+    outer_mesh = pv.merge(outer_parts).clip(normal=CAMERA_DIRECTION, origin=(0.0, 0.0, 0.0))
     inner_parts = [_flank(pv, ipts)]
     for ring in (ipts[0], ipts[-1]):
         ctr = np.array([ic[0], ic[1], ring[0, 2]])
         s = 1.0 + (scale_z - 1.0) * ring[0, 2] / case.length
         ctr[:2] *= s
-        inner_parts.append(_fan(pv, ring, ctr) if _star_shaped(ring, ctr)
-                           else pv.PolyData(ring, np.r_[len(ring), np.arange(len(ring))])
-                           .triangulate())
-    inner = pv.merge(inner_parts)
+        inner_parts.append(_cap(pv, ring, ctr))
+    return outer_mesh, pv.merge(inner_parts)
 
-    files = []
+
+def _rotors_picture(pv, case, outer, inner, wrap_outer_deg: float, path: Path) -> Path:
+    """Both rotors in 3D at outer-rotor angle 0, seen from CAMERA_DIRECTION."""
+    d = case.pair.diameter
     plotter = pv.Plotter(off_screen=True, window_size=WINDOW)
     plotter.set_background("white")
-    for mesh, colour in ((outer, OUTER_COLOUR), (inner, INNER_COLOUR)):
+    for mesh, colour in zip(_rotor_meshes(pv, case, outer, inner),
+                            (OUTER_COLOUR, INNER_COLOUR), strict=True):
         plotter.add_mesh(mesh, color=colour, smooth_shading=True, split_sharp_edges=True,
                          specular=0.3)
     lobes = "/".join(str(r.lobes) for r in case.pair.rotors)
@@ -160,27 +178,29 @@ def render_case(case, folder: Path, wrap_outer_deg: float) -> list[Path]:
                                (0.0, 0.0, 0.45 * case.length), (0.0, 0.0, 1.0)]
     plotter.camera.zoom(1.5)
     plotter.enable_anti_aliasing("ssaa")
-    path = folder / "rotors.png"
     plotter.screenshot(str(path))
     plotter.close()
-    files.append(path)
+    return path
 
-    # ------------------------------------------------------- end-plane section
+
+def _section_picture(pv, case, outer, inner, path: Path) -> Path:
+    """The low-pressure end plane seen along the axis: outer-rotor material, chambers,
+    inner rotor, profiles and axes."""
+    (opts, oc), (ipts, ic) = outer, inner
+    d = case.pair.diameter
     plotter = pv.Plotter(off_screen=True, window_size=(800, 800))
     plotter.set_background("white")
-    disc = pv.Disc(center=(0, 0, -2e-3 * d), inner=0.0, outer=bore, c_res=180)
+    disc = pv.Disc(center=(0, 0, -2e-3 * d), inner=0.0, outer=0.5 * BORE_RATIO * d,
+                   c_res=180)
     plotter.add_mesh(disc, color=OUTER_COLOUR, lighting=False)
+    o0 = opts[0]
     ring = o0.copy()
     ring[:, 2] = -1e-3 * d
-    plotter.add_mesh(_fan(pv, ring, np.array([oc[0], oc[1], ring[0, 2]]))
-                     if _star_shaped(ring, oc)
-                     else pv.PolyData(ring, np.r_[len(ring), np.arange(len(ring))]).triangulate(),
+    plotter.add_mesh(_cap(pv, ring, np.array([oc[0], oc[1], ring[0, 2]])),
                      color=FLUID_COLOUR, lighting=False)
     iring = ipts[0]
-    ictr = np.array([ic[0], ic[1], 0.0])
-    plotter.add_mesh(_fan(pv, iring, ictr) if _star_shaped(iring, ictr)
-                     else pv.PolyData(iring, np.r_[len(iring), np.arange(len(iring))])
-                     .triangulate(), color=INNER_COLOUR, lighting=False)
+    plotter.add_mesh(_cap(pv, iring, np.array([ic[0], ic[1], 0.0])), color=INNER_COLOUR,
+                     lighting=False)
     for r, w in ((o0, 2), (iring, 2)):
         line = pv.lines_from_points(np.vstack([r, r[:1]]) + [0, 0, 1e-3 * d])
         plotter.add_mesh(line, color="black", line_width=w)
@@ -192,9 +212,6 @@ def render_case(case, folder: Path, wrap_outer_deg: float) -> list[Path]:
     plotter.view_xy()
     plotter.enable_parallel_projection()
     plotter.camera.parallel_scale = 0.55 * BORE_RATIO * d
-    path = folder / "section.png"
     plotter.screenshot(str(path))
     plotter.close()
-    files.append(path)
-    log.info("rendered %s", ", ".join(p.name for p in files))
-    return files
+    return path

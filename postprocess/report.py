@@ -4,14 +4,15 @@ A report is a folder with ``index.html`` and the pictures it shows, all referenc
 relative paths, so it opens from disk.  Every figure is made from the run's own
 artifacts (the upstream stage folders); nothing is drawn from defaults.
 
-Each stage contributes its section through the ``report`` hook named in its
-registration (:mod:`rotorflow.workflow.stages`)::
+This module holds the building blocks (:class:`Section`, :func:`esc`, :func:`table`,
+:func:`figure`, :func:`page`), the sections of the built-in stages, and the pages.  It
+knows nothing of stages or caching: the workflow (:mod:`rotorflow.workflow.report_stage`)
+decides which sections a case's report shows and hands them to :func:`case_page`.  A
+section function has the signature::
 
     def my_section(artifact_dir: Path, report_dir: Path, case) -> Section | None
 
-which may write pictures into ``report_dir`` (name them after the stage) and returns the
-HTML of its section.  CFD stages add their comparison tables and plots the same way,
-and appear in the report of every case that planned them.
+and may write pictures into ``report_dir`` (named after the stage).
 
 A small script in the page checks, once it has loaded, that every ``<img>`` decoded
 (``naturalWidth > 0``); it writes the count and any broken sources into the ``body``'s
@@ -225,36 +226,18 @@ def solids_section(artifact: Path, report_dir: Path, case) -> Section:
 
 
 # ------------------------------------------------------------------ case report
-def run_report(ctx) -> dict:
-    """The ``report`` stage: index.html and its pictures from the upstream artifacts."""
-    from rotorflow.workflow.cache import read_stamp
-    from rotorflow.workflow.runner import resolve
-    from rotorflow.workflow.stages import REGISTRY
-
-    out = ctx.out
-    sections, status = [], []
-    order = list(REGISTRY)
-    for name in sorted(ctx.inputs, key=lambda n: (REGISTRY[n].report_rank, order.index(n))):
-        folder, stage = ctx.inputs[name], REGISTRY[name]
-        stamp = read_stamp(folder) or {}
-        status.append([name, stage.description, stamp.get("key", "")[:12],
-                       stamp.get("created", ""), stamp.get("seconds", "")])
-        if stage.report:
-            sec = resolve(stage.report)(folder, out, ctx.case)
-            if sec is not None:
-                sections.append((name, sec))
-    case = ctx.case
-    body = [f"<h1>rotorflow report: {esc(case.name)}</h1>",
-            f"<p>Case file <code>{esc(ctx.case_path)}</code>.</p>",
+def case_page(name: str, case_path, case_text: str, status: list[list],
+              sections: list[tuple[str, Section]]) -> str:
+    """The report of a case: its stages (``status``: stage, what, key, built, seconds),
+    their sections in the order given (anchored by stage name), and the case file."""
+    body = [f"<h1>rotorflow report: {esc(name)}</h1>",
+            f"<p>Case file <code>{esc(case_path)}</code>.</p>",
             "<h2>Stages</h2>",
             table(["stage", "what", "key", "built", "seconds"], status)]
-    for name, sec in sections:
-        body.append(f"<h2 id='{esc(name)}'>{esc(sec.title)}</h2>\n{sec.html}")
-    text = Path(ctx.case_path).read_text() if Path(ctx.case_path).is_file() else ""
-    body.append(f"<h2>Case file</h2><pre>{esc(text)}</pre>")
-    (out / "index.html").write_text(page(f"rotorflow: {case.name}", "\n".join(body)))
-    images = sorted(p.name for p in out.glob("*.png"))
-    return {"index": "index.html", "images": images, "sections": [n for n, _ in sections]}
+    for stage, sec in sections:
+        body.append(f"<h2 id='{esc(stage)}'>{esc(sec.title)}</h2>\n{sec.html}")
+    body.append(f"<h2>Case file</h2><pre>{esc(case_text)}</pre>")
+    return page(f"rotorflow: {name}", "\n".join(body))
 
 
 # ------------------------------------------------------------------ sweep report

@@ -82,7 +82,7 @@ def test_small_sweep_on_a_scheduler_records_failure_and_caches(tmp_path, schedul
 
 
 def test_random_samples_are_seeded(tmp_path):
-    from rotorflow.workflow.sweep import load_sweep
+    from rotorflow.workflow.sweep_file import load_sweep
 
     text = f"""
 [study]
@@ -110,7 +110,8 @@ def test_point_case_files_round_trip(tmp_path):
     import tomllib
 
     from rotorflow.workflow.case import load_case
-    from rotorflow.workflow.sweep import dumps_toml, load_sweep, point_raw
+    from rotorflow.workflow.sweep_file import load_sweep
+    from rotorflow.workflow.sweep_points import dumps_toml, point_raw
 
     path = tmp_path / "s.toml"
     path.write_text(SMALL.format(base=(CASES / "default.toml").as_posix()))
@@ -126,7 +127,8 @@ def test_point_case_files_round_trip(tmp_path):
 def test_jobqueue_cluster_is_built_from_the_sweep_file(tmp_path):
     """The batch-system route: the SLURM job script carries the sweep file's options."""
     pytest.importorskip("dask_jobqueue")
-    from rotorflow.workflow.sweep import jobqueue_cluster, load_sweep
+    from rotorflow.workflow.dask_cluster import jobqueue_cluster
+    from rotorflow.workflow.sweep_file import load_sweep
 
     path = tmp_path / "s.toml"
     path.write_text(SMALL.format(base=(CASES / "default.toml").as_posix()) + """
@@ -155,6 +157,7 @@ scheduler_options = { dashboard_address = ":0" }
     ("[study]\nbase = 'default.toml'\n", "no points"),
     ("[study]\nbase = 'nope.toml'\n[grid]\n'machine.lambda' = [1.3]\n", "not found"),
     ("[study]\nbase = 'default.toml'\n[grid]\n'machine.lamda' = [1.3]\n", "lamda"),
+    ("[study]\nbase = 'default.toml'\n[grid]\n'export.tolerence_um' = [5]\n", "tolerence_um"),
     ("[study]\nbase = 'default.toml'\n[grid]\n'lambda' = [1.3]\n", "section.key"),
     ("[study]\nbase = 'default.toml'\n[grid]\n'machine.lambda' = 1.3\n", "machine.lambda"),
     ("[study]\nbase = 'default.toml'\nwant = ['cfd']\n[grid]\n'machine.lambda' = [1.3]\n",

@@ -21,19 +21,19 @@ MACHINE_MEMO_SIZE = 4
 _machines: OrderedDict = OrderedDict()
 
 
-def _finite(obj):
-    """JSON has no NaN or infinity: write them as null."""
+def finite(obj):
+    """JSON has no NaN or infinity: write them as null rather than emit invalid JSON."""
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
     if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
+        return {k: finite(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
-        return [_finite(v) for v in obj]
+        return [finite(v) for v in obj]
     return obj
 
 
 def write_json(path, obj) -> None:
-    path.write_text(json.dumps(_finite(obj), indent=2) + "\n")
+    path.write_text(json.dumps(finite(obj), indent=2) + "\n")
 
 
 def machine_of(ctx: StageContext):

@@ -34,7 +34,7 @@ import socket
 import sys
 import time
 import uuid
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
@@ -211,17 +211,8 @@ class CaseBuild:
             finally:
                 fcntl.flock(fh, fcntl.LOCK_UN)
 
-    def record_path(self) -> Path:
-        return self.folder / RECORD
-
-    def read_record(self) -> dict | None:
-        try:
-            return json.loads(self.record_path().read_text())
-        except (OSError, ValueError):
-            return None
-
     def write_record(self, record: dict) -> None:
-        write_json_atomic(self.record_path(), record)
+        write_json_atomic(self.folder / RECORD, record)
 
 
 @dataclass
@@ -233,7 +224,6 @@ class StageContext:
     raw: dict
     out: Path
     inputs: dict[str, Path]
-    record: dict = field(default_factory=dict)
     _case: object = None
 
     @cached_property

@@ -72,6 +72,28 @@ def load_case(path: Path) -> Case:
     for name in data:
         if name not in SECTIONS:
             raise CaseError(f"unknown section [{name}] in {path}")
+    pair, length = _machine(data, path)
+    kind, wrap, wrap_bar, scale_end, lead_ratio = _sweep_law(data, path, pair.diameter)
+    volume_ratio, driven = _operating(data, path)
+    validate_stage_sections(data, path, pair)
+    return Case(
+        name=path.stem,
+        path=path,
+        pair=pair,
+        sweep_kind=kind,
+        length=length,
+        wrap=wrap,
+        wrap_bar=wrap_bar,
+        scale_end=scale_end,
+        lead_ratio=lead_ratio,
+        volume_ratio=volume_ratio,
+        driven=driven,
+        raw=data,
+    )
+
+
+def _machine(data: dict, path: Path) -> tuple[RotorPair, float]:
+    """[machine]: the family's pair, and the rotor length [m]."""
     if "machine" not in data:
         raise CaseError(f"missing section [machine] in {path}")
     m = data["machine"]
@@ -88,8 +110,12 @@ def load_case(path: Path) -> Case:
     if not length > 0.0:
         raise CaseError(f"length_mm must be positive in {where}")
     pair = family.from_section({k: v for k, v in m.items() if k in family.keys}, where)
-    diameter = pair.diameter
+    return pair, length
 
+
+def _sweep_law(data: dict, path: Path, diameter: float):
+    """[sweep]: kind, outer wrap [rad] or wrap_bar (the other None), end scale and lead
+    ratio (both 1 but for a conical sweep)."""
     s = data.get("sweep", {"kind": "straight"})
     _check_keys(s, SWEEP_KEYS, "sweep", path)
     where = f"[sweep] of {path}"
@@ -124,7 +150,11 @@ def load_case(path: Path) -> Case:
             raise CaseError(f"lead_ratio must be positive in {where}")
     elif "diameter_end_mm" in s or "lead_ratio" in s:
         raise CaseError(f"diameter_end_mm and lead_ratio belong to a conical sweep in {where}")
+    return kind, wrap, wrap_bar, scale_end, lead_ratio
 
+
+def _operating(data: dict, path: Path) -> tuple[float, str]:
+    """The [operating] keys the geometry reads: volume ratio and driven rotor."""
     op = data.get("operating", {})
     if not isinstance(op, dict):
         raise CaseError(f"[operating] in {path} must be a table")
@@ -135,21 +165,7 @@ def load_case(path: Path) -> Case:
     driven = op.get("driven", "auto")
     if driven not in ("inner", "outer", "auto"):
         raise CaseError(f"driven must be 'inner', 'outer' or 'auto' in {where}, got {driven!r}")
-    validate_stage_sections(data, path, pair)
-    return Case(
-        name=path.stem,
-        path=path,
-        pair=pair,
-        sweep_kind=kind,
-        length=length,
-        wrap=wrap,
-        wrap_bar=wrap_bar,
-        scale_end=scale_end,
-        lead_ratio=lead_ratio,
-        volume_ratio=volume_ratio,
-        driven=driven,
-        raw=data,
-    )
+    return volume_ratio, driven
 
 
 def validate_stage_sections(data: dict, path: Path, pair: RotorPair | None = None) -> None:

@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
-import math
 import os
 import shutil
 import sys
@@ -20,22 +19,14 @@ from rotorflow import __version__
 from rotorflow.errors import CaseError, RotorflowError
 
 
-def _finite(obj):
-    """JSON has no NaN or infinity: report them as null rather than emit invalid JSON."""
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    return obj
-
-
 def cmd_geometry(args) -> int:
     from rotorflow.geometry.summary import geometry_figures
+    from rotorflow.workflow.builtin import finite
     from rotorflow.workflow.case import load_case
 
     figures = geometry_figures(load_case(args.case))
     if args.json:
-        print(json.dumps(_finite(figures), indent=2))
+        print(json.dumps(finite(figures), indent=2))
     else:
         width = max(len(k) for k in figures)
         for key, value in figures.items():
@@ -66,7 +57,6 @@ def cmd_table(args) -> int:
 
 
 def cmd_contacts(args) -> int:
-    from rotorflow.errors import CaseError
     from rotorflow.geometry.contacts import write_csv
     from rotorflow.workflow.case import load_case
 
@@ -82,6 +72,7 @@ def cmd_contacts(args) -> int:
 def cmd_simulate(args) -> int:
     from rotorflow.geometry.summary import chamber_table
     from rotorflow.quasi1d import Leakage, Numerics, Operating, Ports, simulate
+    from rotorflow.workflow.builtin import finite
     from rotorflow.workflow.case import load_case
 
     case = load_case(args.case)
@@ -108,7 +99,7 @@ def cmd_simulate(args) -> int:
             shutil.rmtree(tmp, ignore_errors=True)
     figures = result.summary()
     if args.json:
-        print(json.dumps(_finite(figures), indent=2))
+        print(json.dumps(finite(figures), indent=2))
     else:
         for key, value in figures.items():
             print(f"{key:<32} {value:.6g}" if isinstance(value, float) else f"{key:<32} {value}")
@@ -257,8 +248,6 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("-v", "--verbose", action="store_true", help="log progress")
     w.set_defaults(func=cmd_sweep)
     return parser
-
-
 
 
 def main(argv: list[str] | None = None) -> int:

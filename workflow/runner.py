@@ -51,34 +51,25 @@ def prepare(case_path: Path, extra: list[str] | None = None):
     return case, want, order
 
 
-def stage_keys(case, order: list[str], build: CaseBuild, fresh: set[str] = frozenset()):
-    """Key of every planned stage whose upstream is complete, as far as can be known.
-
-    A stage downstream of one that must run gets no key (None) until that one has run,
-    since its key depends on the new artifact's hash.
-    """
-    keys, hashes = {}, {}
-    for name in order:
-        stage = st.REGISTRY[name]
-        ups = st.upstream(name, order)
-        if any(hashes.get(u) is None for u in ups):
-            keys[name] = hashes[name] = None
-            continue
-        key = stage_key(name, stage.version, st.select(case.raw, stage.reads),
-                        {u: hashes[u] for u in ups}, code_hash(stage.code_modules))
-        keys[name] = key
-        stamp = build.stamp(name)
-        ok = stamp is not None and stamp["key"] == key and name not in fresh
-        hashes[name] = stamp["artifact_hash"] if ok else None
-    return keys, hashes
+def _key(case, stage: st.Stage, ups: list[str], hashes: dict[str, str | None]) -> str:
+    """A stage's key, once the artifact hashes of its upstream stages are known."""
+    return stage_key(stage.name, stage.version, st.select(case.raw, stage.reads),
+                     {u: hashes[u] for u in ups}, code_hash(stage.code_modules))
 
 
 def up_to_date(case_path: Path, root: Path = DEFAULT_BUILD,
                extra: list[str] | None = None) -> bool:
     """True when a run of the case would execute nothing (raises CaseError on bad input)."""
     case, _, order = prepare(case_path, extra)
-    _, hashes = stage_keys(case, order, CaseBuild(Path(root), case.name))
-    return all(hashes[n] is not None for n in order)
+    build = CaseBuild(Path(root), case.name)
+    hashes: dict[str, str | None] = {}
+    for name in order:  # upstream first, so every upstream hash is known
+        ups = st.upstream(name, order)
+        stamp = build.stamp(name)
+        if stamp is None or stamp["key"] != _key(case, st.REGISTRY[name], ups, hashes):
+            return False
+        hashes[name] = stamp["artifact_hash"]
+    return True
 
 
 def run_case(case_path: Path, root: Path = DEFAULT_BUILD, extra: list[str] | None = None,
@@ -113,9 +104,7 @@ def run_case(case_path: Path, root: Path = DEFAULT_BUILD, extra: list[str] | Non
                 entry.update(status="blocked", error=f"upstream stage {bad[0]} failed")
                 hashes[name] = None
             else:
-                key = stage_key(name, stage.version, st.select(case.raw, stage.reads),
-                                {u: hashes[u] for u in ups}, code_hash(stage.code_modules))
-                entry["key"] = key
+                key = entry["key"] = _key(case, stage, ups, hashes)
                 stamp = build.stamp(name)
                 if stamp is not None and stamp["key"] == key and name not in forced:
                     entry.update(status="cached", artifact_hash=stamp["artifact_hash"])

@@ -315,7 +315,7 @@ register(Stage(
 ))
 register(Stage(
     name="report",
-    run=f"{_REPORT}:run_report",
+    run="rotorflow.workflow.report_stage:run_report",
     description="static HTML report of every planned stage (report/index.html)",
     reads=("*",),
     needs=("geometry", "render"),

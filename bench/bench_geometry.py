@@ -11,11 +11,11 @@ Target: a full case (profiles, volume curve, forces) at 1e-4 relative error in u
 from __future__ import annotations
 
 import csv
+import dataclasses
 import time
 from pathlib import Path
 
 from rotorflow.geometry.forces import power_split
-from rotorflow.geometry.internal_gear.pair import PinGerotor
 from rotorflow.geometry.machine import SweptMachine
 from rotorflow.workflow.case import load_case
 
@@ -31,7 +31,7 @@ TARGET_ERROR = 1e-4
 def _full_case(case, ppp, refinement):
     t0 = time.perf_counter()
     # A fresh pair: nothing cached from an earlier resolution.
-    pair = PinGerotor(case.pair.lobes_outer, case.pair.lam, case.pair.sigma, case.pair.diameter)
+    pair = dataclasses.replace(case.pair)
     m = SweptMachine(pair, case.sweep(None), ppp, refinement)
     _ = m.curves.volume
     split = power_split(m, case.volume_ratio, case.driven)

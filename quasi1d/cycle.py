@@ -86,14 +86,47 @@ def _pT(model, z):
     return p[1:], T[1:]
 
 
-def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolution:
+def _unknowns(model: ChamberModel) -> np.ndarray:
+    """State entries the Newton iteration solves for: every slot's but the newborn's
+    (slot 0 is born at the suction state) and those of slots already dead."""
     n, nv = model.n, model.nv
-    scales = model.scales()
-    atol = num.atol * model.atol_scales()
     idx = np.concatenate([np.arange(b * n + 1, (b + 1) * n) for b in range(nv)])
     alive = np.array([model.geo.birth + k * model.geo.period <= model.geo.death
                       for k in range(1, n)] * nv)
-    idx = idx[alive]
+    return idx[alive]
+
+
+def _update_best(model, run, z, z_next, idx, dz, norm, best, lam, figures):
+    """Keep the iterate with the smallest residual and its Newton step (None when the
+    Jacobian is singular or the step not finite); a worse iterate halves the damping."""
+    if not (best is None or norm < best[0]):  # (a NaN residual is never the best)
+        return best, lam * 0.5
+    Phi = np.stack([model.shift(yy)[idx] for yy in run.y[1:]])  # row i: input i
+    J = ((Phi - z_next[idx]) / dz[:, None]).T - np.eye(idx.size)
+    try:
+        step = np.linalg.solve(J, -(z_next - z)[idx])
+    except np.linalg.LinAlgError:
+        step = None
+    if step is not None and not np.all(np.isfinite(step)):
+        step = None
+    return (norm, z, run, step, z_next, figures), 1.0
+
+
+def _damped(model, best, idx, lam):
+    """The damped Newton iterate from the best state, shrunk until it is physical; the
+    best iterate's successor when none is."""
+    for shrink in (1.0, 0.5, 0.25):
+        cand = best[1].copy()
+        cand[idx] += lam * shrink * best[3]
+        if _plausible(model, cand):
+            return cand
+    return best[4]
+
+
+def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolution:
+    scales = model.scales()
+    atol = num.atol * model.atol_scales()
+    idx = _unknowns(model)
     d = idx.size
     newton = num.newton and d > 0
     dz = FD_STEP * scales[idx]
@@ -141,27 +174,11 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
         # that does not lower the residual is halved (the map has kinks where flows
         # reverse), and after four halvings a plain cycle step restarts the search.
         norm = float(np.max(np.abs(z_next - z)[idx] / scales[idx]))
-        if best is None or norm < best[0]:
-            Phi = np.stack([model.shift(yy)[idx] for yy in run.y[1:]])  # row i: input i
-            J = ((Phi - z_next[idx]) / dz[:, None]).T - np.eye(d)
-            try:
-                step = np.linalg.solve(J, -(z_next - z)[idx])
-            except np.linalg.LinAlgError:
-                step = None
-            if step is not None and not np.all(np.isfinite(step)):
-                step = None
-            best = (norm, z, run, step, z_next, (dp, dT, mc, ec))
-            lam = 1.0
-        else:
-            lam *= 0.5
+        best, lam = _update_best(model, run, z, z_next, idx, dz, norm, best, lam,
+                                 (dp, dT, mc, ec))
         z = best[4]
         if best[3] is not None and lam >= 1.0 / 16.0:
-            for shrink in (1.0, 0.5, 0.25):  # keep the state physical
-                cand = best[1].copy()
-                cand[idx] += lam * shrink * best[3]
-                if _plausible(model, cand):
-                    z = cand
-                    break
+            z = _damped(model, best, idx, lam)
         elif tightened < STALL_TIGHTEN:
             # Newton stalled: at a coarse tolerance the period map has kinks (flows that
             # reverse inside a step); restart from the best state with a tighter one

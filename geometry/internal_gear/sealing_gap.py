@@ -38,7 +38,6 @@ from ..curves import Clearance, offset_profile
 from ..planar import TWO_PI, rotate
 from .pair import PinGerotor
 from .profiles import inner_profile, outer_profile
-from .space import PinSpace
 
 #: Parameter span searched on each side of the contact on the inner profile, in lobes
 #: (u of :func:`.profiles.inner_profile`): half a lobe, so both ways reach past
@@ -82,7 +81,7 @@ def _contact_frame(pair: PinGerotor, phi1: float):
 
 def _contact_point(pair: PinGerotor, phi1):
     """Contact of pin 0 with the inner rotor at outer angle(s) phi1, fixed frame."""
-    theta = PinSpace(pair).pin_theta(0, phi1)
+    theta = pair.space.pin_theta(0, phi1)
     return rotate(pair.pin_point(0, theta), phi1)
 
 
@@ -106,6 +105,28 @@ def sealing_wall_speeds(pair: PinGerotor, phi1: float, omega_outer: float) -> tu
     return float((v_inner - moving) @ t), float((v_outer - moving) @ t)
 
 
+def _check_arguments(gap: float, inlet_ratio: float, outlet_ratio: float, clearance_on: str):
+    if not gap > 0.0:
+        raise CaseError(f"the gap must be positive, got {gap}")
+    if inlet_ratio <= 1.0 or outlet_ratio <= 1.0:
+        raise CaseError("inlet and outlet gap ratios must exceed 1")
+    if clearance_on not in ("outer", "inner"):
+        raise CaseError(f"clearance_on must be 'outer' or 'inner', not {clearance_on!r}")
+
+
+def _with_clearance(pair: PinGerotor, gap: float, clearance_on: str, where: str):
+    """(outer, inner) profiles, the one named by ``clearance_on`` relieved by ``gap``."""
+    outer, inner = outer_profile(pair), inner_profile(pair)
+    try:
+        if clearance_on == "outer":
+            outer = offset_profile(outer, Clearance((gap,)), +1)
+        else:
+            inner = offset_profile(inner, Clearance((gap,)), -1)
+    except CaseError as exc:
+        raise CaseError(f"{where}: {exc}") from None
+    return outer, inner
+
+
 def sealing_gap_walls(
     pair: PinGerotor,
     phi1: float,
@@ -118,25 +139,13 @@ def sealing_gap_walls(
     """Lower (inner rotor) and upper (outer rotor) walls in the gap frame, with the
     clearance ``gap`` on the rotor ``clearance_on`` ("outer" or "inner")."""
     where = f"no gap section at phi1 = {math.degrees(phi1):.6g} deg"
-    if not gap > 0.0:
-        raise CaseError(f"the gap must be positive, got {gap}")
-    if inlet_ratio <= 1.0 or outlet_ratio <= 1.0:
-        raise CaseError("inlet and outlet gap ratios must exceed 1")
-    if clearance_on not in ("outer", "inner"):
-        raise CaseError(f"clearance_on must be 'outer' or 'inner', not {clearance_on!r}")
-    space = PinSpace(pair)
+    _check_arguments(gap, inlet_ratio, outlet_ratio, clearance_on)
+    space = pair.space
     lead = space.contacts(phi1)[-1]
     if lead.kind != "pin":
         raise CaseError(f"{where}: no pin contact leads the chamber")
     x0, n, t = _contact_frame(pair, phi1)
-    outer, inner = outer_profile(pair), inner_profile(pair)
-    try:
-        if clearance_on == "outer":
-            outer = offset_profile(outer, Clearance((gap,)), +1)
-        else:
-            inner = offset_profile(inner, Clearance((gap,)), -1)
-    except CaseError as exc:
-        raise CaseError(f"{where}: {exc}") from None
+    outer, inner = _with_clearance(pair, gap, clearance_on, where)
     phi2 = pair.m21 * phi1
 
     def upper_xy(u):  # the outer rotor, S1 turned by phi1

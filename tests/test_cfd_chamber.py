@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotorflow.cases import chamber_case
-from rotorflow.cases.foam import MeshQuality
+from rotorflow.cases import chamber_case, chamber_setup, chamber_spec
+from rotorflow.cases.foam_mesh import MeshQuality
 from rotorflow.errors import CaseError
 from rotorflow.postprocess import chamber_compare as cc
 from rotorflow.postprocess.leakage import mismatches
@@ -280,7 +280,7 @@ def test_compression_of_the_default_case():
     c = chamber_case.ChamberCase(comp)
     d = c.domain()
     # Chamber area plus the gap's area up to its throat: the table's volume over the depth.
-    assert (d.area_m2 + chamber_case.upstream_gap_area(comp.walls())) * d.depth_m == (
+    assert (d.area_m2 + chamber_spec.upstream_gap_area(comp.walls())) * d.depth_m == (
         pytest.approx(v[0], rel=1e-12))
     assert d.gap_flow_area_m2 == pytest.approx(20e-6 * comp.seal_length_m, rel=1e-9)
     short = comp.limited_to(30.0)
@@ -292,10 +292,10 @@ def test_compression_of_the_default_case():
 def test_piston_table_gives_the_volume_curve():
     case = _small_case()
     d = case.domain()
-    table = chamber_case.piston_table(case)
+    table = chamber_setup.piston_table(case)
     disp = np.array([row[1][1] for row in table])
     v_zone = (d.height_m + disp) * d.width_m * d.depth_m
-    dead = chamber_case.upstream_gap_area(case.compression.walls()) * d.depth_m
+    dead = chamber_spec.upstream_gap_area(case.compression.walls()) * d.depth_m
     np.testing.assert_allclose(v_zone + dead, case.compression.volume_m3, rtol=1e-12)
 
 

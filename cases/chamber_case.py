@@ -64,6 +64,7 @@ import numpy as np
 
 from rotorflow.errors import CaseError, ExternalRunError
 from rotorflow.postprocess import chamber_compare as cc
+from rotorflow.postprocess.chamber_history import ChamberHistory, read_history
 
 from . import foam, foam_case
 from .chamber_mesh import patch_types
@@ -198,7 +199,7 @@ def judge(case_dir: Path, case: ChamberCase, quality: MeshQuality, cells_gap: in
     samples = 0
     outcome: tuple[str, str] | ExternalRunError
     try:
-        hist = cc.read_history(case_dir, c.volume_curve())
+        hist = read_history(case_dir, c.volume_curve())
         samples = len(hist.time_s)
         end_deg = float(np.degrees(hist.angle_rad[-1]))
         p_end = float(hist.p_Pa[-1])
@@ -227,7 +228,7 @@ def judge(case_dir: Path, case: ChamberCase, quality: MeshQuality, cells_gap: in
     )
 
 
-def _assess(hist: cc.ChamberHistory, c: Compression, ctl: TransientControls,
+def _assess(hist: ChamberHistory, c: Compression, ctl: TransientControls,
             mass_err: float, vol_err: float) -> tuple[str, str]:
     if not (np.all(np.isfinite(hist.p_Pa)) and np.all(hist.p_Pa > 0)):
         return "diverged", "non-finite or negative chamber pressure"

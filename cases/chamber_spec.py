@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from rotorflow.errors import CaseError
-from rotorflow.postprocess import chamber_compare as cc
+from rotorflow.postprocess.chamber_history import VolumeCurve
 from rotorflow.quasi1d.perfect_gas import PerfectGas
 
 from .chamber_mesh import ChamberDomain, ChamberMeshSpec
@@ -75,8 +75,8 @@ class Compression:
     def angle_of(self, time_s) -> np.ndarray:
         return self.angle_rad[0] + np.asarray(time_s, dtype=float) * self.omega_outer_rad_s
 
-    def volume_curve(self) -> cc.VolumeCurve:
-        return cc.VolumeCurve(np.asarray(self.angle_rad), np.asarray(self.volume_m3),
+    def volume_curve(self) -> VolumeCurve:
+        return VolumeCurve(np.asarray(self.angle_rad), np.asarray(self.volume_m3),
                               self.omega_outer_rad_s)
 
     def walls(self) -> GapWalls | None:

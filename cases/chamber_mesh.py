@@ -43,7 +43,6 @@ import numpy as np
 from rotorflow.errors import CaseError
 from rotorflow.gmsh_session import gmsh_session
 
-from . import foam
 from .gap_mesh import GapMeshSpec, GapWalls, gap_blocks
 
 WALL_PATCHES = ("piston", "sideWalls", "bottomWall", "gapWalls")
@@ -316,24 +315,3 @@ def _gap_blocks(geo, domain: ChamberDomain, gspec: GapMeshSpec):
     inlet = ((corner["lower", "in"], across["in", "lower"]),
              (across["in", "upper"], corner["upper", "in"]))
     return blocks, inlet
-
-def build_foam_mesh(case_dir: Path, domain: ChamberDomain,
-                    spec: ChamberMeshSpec) -> tuple[ChamberMesh, foam.MeshQuality]:
-    """Mesh into ``case_dir/chamber.msh``, gmshToFoam, set patch types, checkMesh."""
-    case_dir = Path(case_dir)
-    foam.ensure_system_files(case_dir)
-    mesh = write_msh(domain, spec, case_dir / "chamber.msh")
-    foam.run(case_dir, "gmshToFoam", [mesh.path.name])
-    foam.set_patch_types(case_dir, patch_types(domain.walls is not None))
-    quality = foam.check_mesh(case_dir)
-    if quality.cells != mesh.cells:
-        raise foam.MeshCheckError(
-            f"OpenFOAM mesh has {quality.cells} cells, gmsh made {mesh.cells}, in {case_dir}"
-        )
-    return mesh, quality
-
-
-def square_domain(volume_m3: float, depth_m: float, walls: GapWalls | None) -> ChamberDomain:
-    """A chamber that is square at the start: area volume/depth."""
-    side = math.sqrt(volume_m3 / depth_m)
-    return ChamberDomain(side, side, depth_m, walls)

@@ -1,14 +1,20 @@
-"""The one wrapper around OpenFOAM applications.
+"""The one wrapper around OpenFOAM applications, and the runner that drains planned commands.
 
-Every OpenFOAM program rotorflow runs goes through :func:`run`: an argument list (never a
-shell), the case folder as working directory, stdout and stderr into ``log.<application>``
-inside the case, and a failure raised as :class:`~rotorflow.errors.ExternalRunError`
-carrying the tail of that log.  A log is never taken as proof of success: callers check
-the outputs they need (:func:`check_mesh`, :mod:`rotorflow.postprocess.foam_output`).
+A case plans its OpenFOAM commands as data: a sequence of :class:`Step` (an argument list
+such as ``("gmshToFoam", "gap.msh")`` or ``("checkMesh",)``, and what to do with the
+program's output once it succeeded).  :func:`drain` runs them in order and nothing else
+decides what runs, so the sequence of a case is unit-tested without OpenFOAM.
 
-Dictionaries and fields are read and written with foamlib's ``FoamFile``
-(:func:`write_dict`); post-processing tables are read by
-:mod:`rotorflow.postprocess.foam_output`.
+Every program goes through :func:`run`: an argument list (never a shell), the case folder
+as working directory, stdout and stderr into ``log.<application>`` inside the case, and a
+failure raised as :class:`~rotorflow.errors.ExternalRunError` carrying the tail of that
+log.  A log is never taken as proof of success: the steps check the outputs they need
+(:mod:`rotorflow.cases.foam_mesh`, :mod:`rotorflow.postprocess.foam_output`).  The process
+is started by a *launcher* (:data:`Launch`); the default one starts the OpenFOAM
+application found by :func:`find_installation`, tests pass a fake one.
+
+Dictionaries and fields are written by :mod:`rotorflow.cases.foam_files`; meshes are
+converted and checked by :mod:`rotorflow.cases.foam_mesh`.
 
 Finding OpenFOAM.  Debian's ``openfoam`` package (ESI v1912, what ``make openfoam``
 installs) puts the applications in ``/usr/bin`` but leaves the environment unset, and its
@@ -23,16 +29,15 @@ from __future__ import annotations
 
 import functools
 import logging
-import math
 import os
 import re
 import shutil
 import subprocess
 import time
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 from rotorflow.errors import CaseError, ExternalRunError
 
@@ -60,10 +65,6 @@ POLL_INTERVAL_S = 0.2
 
 class OpenFOAMNotFoundError(CaseError):
     """OpenFOAM is not installed here (or not where rotorflow can find it)."""
-
-
-class MeshCheckError(CaseError):
-    """checkMesh rejected a mesh rotorflow built; the message carries its complaints."""
 
 
 @dataclass(frozen=True)
@@ -169,6 +170,30 @@ def log_tail(path: Path, lines: int = LOG_TAIL_LINES) -> str:
 
 _TIME_LINE = re.compile(rb"^Time = ([-+0-9.eE]+)\s*$", re.MULTILINE)
 
+#: Starts a program: ``(argv, case folder, open log file) -> process``.  The process is a
+#: :class:`subprocess.Popen` or anything with its ``args``, ``returncode``, ``wait(timeout)``
+#: and ``kill()``; its output must go to the log file.
+Launch = Callable[[Sequence[str], Path, BinaryIO], Any]
+
+
+def openfoam_launcher(application: str) -> Launch:
+    """The launcher of an OpenFOAM application: found where :func:`find_installation`
+    found OpenFOAM, run with its environment in the case folder."""
+    inst = find_installation()
+    env = inst.environment()
+    exe = shutil.which(application, path=env["PATH"])
+    if exe is None:
+        raise OpenFOAMNotFoundError(f"OpenFOAM application {application} not found")
+
+    def launch(argv: Sequence[str], case_dir: Path, out: BinaryIO) -> subprocess.Popen:
+        cmd = [exe, *argv[1:]]
+        log.debug("running %s in %s", " ".join(cmd), case_dir)
+        env["PWD"] = str(case_dir.resolve())  # OpenFOAM warns when PWD is not its cwd
+        return subprocess.Popen(cmd, cwd=case_dir, stdout=out, stderr=subprocess.STDOUT,
+                                env=env)
+
+    return launch
+
 
 def run(
     case_dir: Path,
@@ -179,6 +204,7 @@ def run(
     timeout_s: float | None = None,
     on_time: Callable[[float], None] | None = None,
     on_poll: Callable[[], None] | None = None,
+    launch: Launch | None = None,
 ) -> Path:
     """Run ``application args...`` in ``case_dir``; return the path of its log.
 
@@ -187,26 +213,18 @@ def run(
     log tail.  ``on_time`` is called with the latest ``Time = ...`` the solver reported
     (the iteration of a steady solver), for progress bars; ``on_poll`` every
     :data:`POLL_INTERVAL_S` while it runs (a convergence monitor may call
-    :func:`request_stop` from it).
+    :func:`request_stop` from it).  ``launch`` starts the process (default: the OpenFOAM
+    application, :func:`openfoam_launcher`).
     """
-    inst = find_installation()
+    launch = launch or openfoam_launcher(application)
     case_dir = Path(case_dir)
     check_case_path(case_dir)
     if not (case_dir / "system" / "controlDict").is_file():
         raise CaseError(f"{case_dir} is not an OpenFOAM case (no system/controlDict)")
-    exe = shutil.which(application, path=inst.environment()["PATH"])
-    if exe is None:
-        raise OpenFOAMNotFoundError(f"OpenFOAM application {application} not found")
     log_path = case_dir / f"log.{log_name or application}"
-    cmd = [exe, *map(str, args)]
-    log.debug("running %s in %s", " ".join(cmd), case_dir)
     start = time.monotonic()
-    env = inst.environment()
-    env["PWD"] = str(case_dir.resolve())  # OpenFOAM warns when PWD is not its cwd
     with log_path.open("wb") as out:
-        proc = subprocess.Popen(
-            cmd, cwd=case_dir, stdout=out, stderr=subprocess.STDOUT, env=env
-        )
+        proc = launch([application, *map(str, args)], case_dir, out)
         try:
             _wait(proc, log_path, start, timeout_s, on_time, on_poll)
         except BaseException:
@@ -226,6 +244,50 @@ def run(
         )
     log.info("%s finished in %.1f s (%s)", application, time.monotonic() - start, case_dir)
     return log_path
+
+
+# --- planned commands ---------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Step:
+    """One planned OpenFOAM command: its argument list and what to do around it.
+
+    ``then(case_dir, log_path)`` runs once the program succeeded: it reads or edits what
+    the program wrote (sets the patch types gmshToFoam left untyped, judges checkMesh's
+    report) and raises if that is wrong; what it returns is the step's value.
+    ``timeout_s``, ``on_time`` and ``on_poll`` are :func:`run`'s.
+    """
+
+    argv: tuple[str, ...]
+    then: Callable[[Path, Path], Any] | None = field(default=None, compare=False)
+    timeout_s: float | None = None
+    on_time: Callable[[float], None] | None = field(default=None, compare=False)
+    on_poll: Callable[[], None] | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        if not self.argv or not all(isinstance(a, str) for a in self.argv):
+            raise ValueError(f"a step's argv is a non-empty tuple of strings, not {self.argv!r}")
+
+    @property
+    def program(self) -> str:
+        return self.argv[0]
+
+
+def drain(steps: Iterable[Step], case_dir: Path, *, launch: Launch | None = None
+          ) -> dict[str, Any]:
+    """Run ``steps`` in order in ``case_dir``, each with its log ``log.<program>``.
+
+    The first program that fails (or whose ``then`` raises) stops the drain: its error,
+    with the tail of its log, is raised and no later step runs.  Returns each program's
+    value (what its ``then`` returned, else its log path) by program name.
+    """
+    values: dict[str, Any] = {}
+    for step in steps:
+        log_path = run(case_dir, step.program, step.argv[1:], timeout_s=step.timeout_s,
+                       on_time=step.on_time, on_poll=step.on_poll, launch=launch)
+        values[step.program] = log_path if step.then is None else step.then(case_dir, log_path)
+    return values
 
 
 #: Characters OpenFOAM's fileName rejects (it strips them and then fails).
@@ -294,190 +356,6 @@ def request_stop(case_dir: Path) -> None:
 def _log_has(path: Path, needle: bytes) -> bool:
     with path.open("rb") as fh:
         return any(needle in line for line in fh)
-
-
-# --- dictionaries -------------------------------------------------------------------------
-
-
-def write_dict(path: Path, entries: Mapping[str, Any]) -> Path:
-    """Write an OpenFOAM dictionary (header included) with foamlib; returns ``path``.
-
-    Multi-word entries are tuples (``("Gauss", "linear")``), lists are OpenFOAM lists,
-    nested mappings sub-dictionaries.  An existing file is replaced, not merged.
-    """
-    from foamlib import FoamFile
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.unlink(missing_ok=True)
-    with FoamFile(path) as f:
-        for key, value in entries.items():
-            f[key] = value
-    return path
-
-
-def write_field(
-    path: Path,
-    dimensions: Sequence[float],
-    internal: Any,
-    boundary: Mapping,
-    *,
-    vector: bool = False,
-) -> Path:
-    """Write a volume field file (``0/p``, ``0/U``, ...) with foamlib.
-
-    ``internal`` and the boundary ``value``/``inletValue`` entries are plain numbers or
-    arrays (foamlib adds ``uniform``/``nonuniform``); other field-valued entries such as
-    ``p0`` must be given as ``("uniform", x)``.  The class is set explicitly because a
-    list of three scalars is indistinguishable from one vector.
-    """
-    from foamlib import FoamFieldFile
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.unlink(missing_ok=True)
-    with FoamFieldFile(path) as f:
-        f["FoamFile"] = {
-            "version": 2.0,
-            "format": "ascii",
-            "class": "volVectorField" if vector else "volScalarField",
-            "location": f'"{path.parent.name}"',
-            "object": path.name,
-        }
-        f["dimensions"] = FoamFieldFile.DimensionSet(*dimensions, *[0] * (7 - len(dimensions)))
-        f["internalField"] = internal
-        f["boundaryField"] = dict(boundary)
-    return path
-
-
-_MINIMAL_SYSTEM: dict[str, dict[str, Any]] = {
-    "controlDict": {
-        "application": "checkMesh",
-        "startFrom": "latestTime",
-        "startTime": 0,
-        "stopAt": "endTime",
-        "endTime": 0,
-        "deltaT": 1,
-        "writeControl": "timeStep",
-        "writeInterval": 1,
-    },
-    "fvSchemes": {
-        key: {"default": "none"}
-        for key in ("ddtSchemes", "gradSchemes", "divSchemes", "laplacianSchemes",
-                    "interpolationSchemes", "snGradSchemes")
-    },
-    "fvSolution": {"solvers": {}},
-}
-
-
-def ensure_system_files(case_dir: Path) -> None:
-    """Write stand-in ``system`` dictionaries where missing (mesh utilities read them)."""
-    for name, entries in _MINIMAL_SYSTEM.items():
-        path = Path(case_dir) / "system" / name
-        if not path.is_file():
-            write_dict(path, entries)
-
-
-def set_patch_types(case_dir: Path, types: Mapping[str, str]) -> None:
-    """Set the ``type`` of named patches in ``constant/polyMesh/boundary``.
-
-    gmshToFoam makes every patch a plain ``patch``; walls and the empty front and back of
-    a 2D mesh are set here.  A name missing from the mesh is a CaseError (boundary names
-    must survive gmsh -> OpenFOAM), and so is a patch left without a type.
-    """
-    from foamlib import FoamFile
-
-    path = Path(case_dir) / "constant" / "polyMesh" / "boundary"
-    boundary = FoamFile(path)
-    entries = list(boundary[None])
-    names = [name for name, _ in entries]
-    missing = sorted(set(types) - set(names))
-    if missing:
-        raise CaseError(
-            f"mesh in {case_dir} lacks patch(es) {', '.join(missing)}; it has {', '.join(names)}"
-        )
-    untyped = sorted(set(names) - set(types))
-    if untyped:
-        raise CaseError(f"no patch type given for {', '.join(untyped)} in {case_dir}")
-    new = []
-    for name, entry in entries:
-        entry = dict(entry)
-        entry["type"] = types[name]
-        entry.pop("physicalType", None)
-        if types[name] == "wall":
-            entry["inGroups"] = ["wall", "walls"]
-        else:
-            entry.pop("inGroups", None)
-        new.append((name, entry))
-    boundary[None] = new
-
-
-def patch_face_counts(case_dir: Path) -> dict[str, int]:
-    """``{patch: nFaces}`` from ``constant/polyMesh/boundary``."""
-    from foamlib import FoamFile
-
-    entries = FoamFile(Path(case_dir) / "constant" / "polyMesh" / "boundary")[None]
-    return {name: int(entry["nFaces"]) for name, entry in entries}
-
-
-# --- meshes --------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class MeshQuality:
-    """What checkMesh says about a mesh."""
-
-    cells: int
-    faces: int
-    points: int
-    max_aspect_ratio: float
-    max_non_orthogonality_deg: float
-    mean_non_orthogonality_deg: float
-    max_skewness: float
-    failed_checks: tuple[str, ...]
-
-    @property
-    def ok(self) -> bool:
-        return not self.failed_checks
-
-
-def parse_check_mesh(text: str) -> MeshQuality:
-    """Parse checkMesh's report (the log of ``checkMesh``)."""
-
-    def number(pattern: str) -> float:
-        m = re.search(pattern, text)
-        return float(m.group(1)) if m else math.nan
-
-    def count(pattern: str) -> int:  # -1 where checkMesh did not get as far as saying
-        m = re.search(pattern, text)
-        return int(m.group(1)) if m else -1
-
-    failed = tuple(line.strip() for line in text.splitlines() if line.strip().startswith("***"))
-    if "Mesh OK." not in text and not failed:
-        failed = ("checkMesh did not report 'Mesh OK.'",)
-    return MeshQuality(
-        cells=count(r"\n\s*cells:\s+(\d+)"),
-        faces=count(r"\n\s*faces:\s+(\d+)"),
-        points=count(r"\n\s*points:\s+(\d+)"),
-        max_aspect_ratio=number(r"Max aspect ratio = ([-+0-9.eE]+)"),
-        max_non_orthogonality_deg=number(r"non-orthogonality Max: ([-+0-9.eE]+)"),
-        mean_non_orthogonality_deg=number(
-            r"non-orthogonality Max: [-+0-9.eE]+ average: ([-+0-9.eE]+)"
-        ),
-        max_skewness=number(r"Max skewness = ([-+0-9.eE]+)"),
-        failed_checks=failed,
-    )
-
-
-def check_mesh(case_dir: Path) -> MeshQuality:
-    """Run checkMesh; a failed check raises MeshCheckError quoting checkMesh's complaints."""
-    log_path = run(case_dir, "checkMesh")
-    quality = parse_check_mesh(log_path.read_text(errors="replace"))
-    if not quality.ok:
-        raise MeshCheckError(
-            f"checkMesh rejects the mesh in {case_dir}: " + "; ".join(quality.failed_checks)
-        )
-    return quality
 
 
 def _main() -> None:

@@ -31,7 +31,8 @@ from scipy.optimize import brentq, minimize_scalar
 from rotorflow.errors import CaseError
 from rotorflow.gmsh_session import gmsh_session
 
-from . import foam
+from .foam_files import ensure_system_files
+from .foam_mesh import MeshQuality, convert
 
 PATCH_TYPES = {
     "inlet": "patch",
@@ -484,22 +485,16 @@ def gap_blocks(geo, walls: GapWalls, spec: GapMeshSpec, names: dict[str, str | N
     return blocks, corner, across
 
 
-def build_foam_mesh(case_dir: Path, walls: GapWalls, spec: GapMeshSpec) -> tuple[GapMesh,
-                                                                                  foam.MeshQuality]:
-    """Mesh into ``case_dir/gap.msh``, convert with gmshToFoam, set patch types, checkMesh.
+def build_foam_mesh(case_dir: Path, walls: GapWalls, spec: GapMeshSpec
+                    ) -> tuple[GapMesh, MeshQuality]:
+    """Mesh into ``case_dir/gap.msh``, convert with gmshToFoam, set patch types, checkMesh
+    (:func:`rotorflow.cases.foam_mesh.convert`).
 
     Missing ``system`` files get minimal stand-ins (checkMesh reads them).  A mesh that
-    checkMesh rejects raises :class:`~rotorflow.cases.foam.MeshCheckError` with its
+    checkMesh rejects raises :class:`~rotorflow.cases.foam_mesh.MeshCheckError` with its
     complaints.
     """
     case_dir = Path(case_dir)
-    foam.ensure_system_files(case_dir)
+    ensure_system_files(case_dir)
     mesh = write_msh(walls, spec, case_dir / "gap.msh")
-    foam.run(case_dir, "gmshToFoam", [mesh.path.name])
-    foam.set_patch_types(case_dir, PATCH_TYPES)
-    quality = foam.check_mesh(case_dir)
-    if quality.cells != mesh.cells:
-        raise foam.MeshCheckError(
-            f"OpenFOAM mesh has {quality.cells} cells, gmsh made {mesh.cells}, in {case_dir}"
-        )
-    return mesh, quality
+    return mesh, convert(case_dir, mesh.path.name, PATCH_TYPES, mesh.cells)

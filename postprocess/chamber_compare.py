@@ -1,21 +1,12 @@
-"""Chamber pressure against rotor angle: the CFD run of case B against the quasi-1D model.
+"""Chamber pressure against rotor angle: the CFD run of case B against the product's
+quasi-1D model.
 
-Reads what :mod:`rotorflow.cases.chamber_case` makes OpenFOAM write (plain text and numpy,
-so recorded outputs are tested without OpenFOAM), integrates the quasi-1D equations of the
-same single closed chamber, and compares.
-
-The quasi-1D chamber: one control volume of volume V(t) (the CFD's volume curve, linear
-between its samples, as the piston table is), adiabatic, perfect gas, at rest at the
-suction state at t = 0, leaking through a gap of flow area A = h x L_s into a plenum at
-suction pressure and temperature.  With its mass m and internal energy U as state:
-
-    dm/dt = -mdot,     dU/dt = -mdot h_up - p dV/dt,     p = (gamma - 1) U / V
-
-where mdot = A sqrt(p_up rho_up) f(p_down / p_up) (times a coefficient) for the
-quasi-1D model's leakage models (:mod:`rotorflow.quasi1d.flows`: isentropic nozzle,
-isothermal Fanno flow), and mdot = L_s m'(point) for the CFD-calibrated correlation of
-:mod:`rotorflow.quasi1d.calibrated` (a mass flow per metre of sealing line).  h_up is
-the enthalpy of the side the gas comes from.  Time is angle over the outer rotor's speed.
+The CFD run's history is read by :mod:`.chamber_history`; the quasi-1D side is the model
+users run, :func:`rotorflow.quasi1d.simulate_transient`, on a one-chamber table made from
+the case's own description (its volume curve, speed, suction state, gas, slab depth and
+gap; :mod:`.chamber_model`), once per leakage model: the isentropic nozzle and Fanno flow
+with their coefficients, and the CFD-calibrated correlation.  The sealed chamber in
+closed form (p V^gamma constant) is drawn as a reference.
 
 Differences are p_model(theta) - p_CFD(theta) at the CFD's samples; "max" is the largest
 magnitude, "RMS" the root mean square over the samples, both also relative to the CFD
@@ -25,274 +16,18 @@ pressure rise p_CFD(end) - p_suction, the figure the leakage changes.
 from __future__ import annotations
 
 import csv
-import functools
 import json
-import logging
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
-from rotorflow.errors import ExternalRunError
+from rotorflow.quasi1d import Leakage
 
-from .foam_output import function_object_table
-
-log = logging.getLogger(__name__)
-
-#: Mass flow out of the chamber (kg/s) as a function of the chamber's p (Pa) and T (K).
-LeakFlow = Callable[[float, float], float]
-
-#: Relative tolerance of the quasi-1D integration: far below any difference reported
-#: (the sealed chamber then follows p V^gamma to ~1e-8).
-ODE_RTOL = 1e-9
-
-#: LSODA: the smoothed nozzle flux is stiff near equal pressures (at the start), the
-#: rest of the compression is not; LSODA switches between the two regimes.
-ODE_METHOD = "LSODA"
-
-
-@dataclass(frozen=True)
-class VolumeCurve:
-    """Chamber volume against outer-rotor angle, linear between samples."""
-
-    angle_rad: np.ndarray
-    volume_m3: np.ndarray
-    omega_outer_rad_s: float
-
-    def time_s(self, angle_rad) -> np.ndarray:
-        return (np.asarray(angle_rad, dtype=float) - self.angle_rad[0]) / self.omega_outer_rad_s
-
-    def angle_of(self, time_s) -> np.ndarray:
-        return self.angle_rad[0] + np.asarray(time_s, dtype=float) * self.omega_outer_rad_s
-
-    @property
-    def duration_s(self) -> float:
-        return float(self.time_s(self.angle_rad[-1]))
-
-    def volume(self, angle_rad) -> np.ndarray:
-        return np.interp(angle_rad, self.angle_rad, self.volume_m3)
-
-    @functools.cached_property
-    def _spline(self):
-        from scipy.interpolate import CubicSpline
-
-        return CubicSpline(self.angle_rad, self.volume_m3)
-
-    def smooth_volume(self, angle_rad) -> np.ndarray:
-        """The cubic spline through the samples: what the quasi-1D chamber integrates.
-
-        It equals the linear curve at the samples and departs from it between them by
-        ~V'' h^2 / 8, ~1e-7 of the volume for 0.1 deg samples; unlike the linear curve it
-        has no kinks, which would make an adaptive integrator straddle one every step.
-        """
-        return self._spline(angle_rad)
-
-    def smooth_dvdt(self, angle_rad) -> np.ndarray:
-        return self._spline(angle_rad, 1) * self.omega_outer_rad_s
-
-
-# --- the CFD history ----------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class ChamberHistory:
-    """The CFD run's samples (one row per sample time)."""
-
-    time_s: np.ndarray
-    angle_rad: np.ndarray
-    p_Pa: np.ndarray
-    """Volume average of p over the chamber zone."""
-    T_K: np.ndarray
-    volume_m3: np.ndarray
-    """Chamber zone volume (integral of p over average of p)."""
-    prescribed_volume_m3: np.ndarray
-    """What the zone's volume should be: V(t) less the gap's volume upstream of its throat."""
-    mass_kg: np.ndarray
-    """Mass in the chamber zone."""
-    domain_mass_kg: np.ndarray
-    """Mass in the whole domain (chamber and gap)."""
-    outflow_kg_s: np.ndarray
-    """Mass flow out through the outlet (zero for a sealed chamber)."""
-
-    def outflow_integral(self) -> np.ndarray:
-        """Mass that has left through the outlet since the first sample (trapezoids)."""
-        dm = 0.5 * (self.outflow_kg_s[1:] + self.outflow_kg_s[:-1]) * np.diff(self.time_s)
-        return np.concatenate([[0.0], np.cumsum(dm)])
-
-    def mass_error(self) -> float:
-        """max |m_domain(t) + outflow until t - m_domain(t0)| / m_domain(t0)."""
-        m0 = self.domain_mass_kg[0]
-        return float(np.max(np.abs(self.domain_mass_kg + self.outflow_integral() - m0)) / m0)
-
-    def volume_error(self) -> float:
-        return float(np.max(np.abs(self.volume_m3 / self.prescribed_volume_m3 - 1.0)))
-
-    def shifted(self, p_factor: float = 1.0) -> ChamberHistory:
-        """A copy with the pressure scaled (perturbed data for tests of the checks)."""
-        from dataclasses import replace
-
-        return replace(self, p_Pa=self.p_Pa * p_factor)
-
-
-def _column(header: list[str], data: np.ndarray, needle: str, where: str) -> np.ndarray:
-    for i, name in enumerate(header):
-        if needle in name:
-            return data[:, i]
-    raise ExternalRunError(f"no column {needle} in {where} (columns: {', '.join(header)})")
-
-
-def _table(case_dir: Path, name: str, file_name: str) -> tuple[list[str], np.ndarray]:
-    return function_object_table(case_dir, name, file_name)
-
-
-def read_history(case_dir: Path, curve: VolumeCurve,
-                 dead_volume_m3: float | None = None) -> ChamberHistory:
-    """Join the chamber run's function-object tables on their common sample times.
-
-    ``dead_volume_m3``: the gap's volume upstream of its throat, excluded from the
-    chamber zone; None: read from ``case_dir/case.json``.
-    """
-    case_dir = Path(case_dir)
-    avg_h, avg = _table(case_dir, "chamberAverage", "volFieldValue.dat")
-    int_h, integ = _table(case_dir, "chamberIntegral", "volFieldValue.dat")
-    dom_h, dom = _table(case_dir, "domainMass", "volFieldValue.dat")
-    tables = [avg, integ, dom]
-    outlet = case_dir / "postProcessing" / "outletFlow"
-    if outlet.is_dir():
-        out_h, out = _table(case_dir, "outletFlow", "surfaceFieldValue.dat")
-        tables.append(out)
-    common = tables[0][:, 0]
-    for t in tables[1:]:
-        common = np.intersect1d(common, t[:, 0])
-    if len(common) < 2:
-        raise ExternalRunError(f"chamber tables in {case_dir} share fewer than two samples")
-
-    if dead_volume_m3 is None:
-        desc = json.loads((case_dir / "case.json").read_text())
-        dead_volume_m3 = desc["upstream_gap_area_m2"] * desc["depth_m"]
-
-    def rows(t: np.ndarray) -> np.ndarray:
-        return t[np.searchsorted(t[:, 0], common)]
-
-    avg, integ, dom = rows(avg), rows(integ), rows(dom)
-    p = _column(avg_h, avg, "(p)", "chamberAverage")
-    p_int = _column(int_h, integ, "(p)", "chamberIntegral")
-    angle = curve.angle_of(common)
-    flow = (_column(out_h, rows(out), "(phi)", "outletFlow") if len(tables) == 4
-            else np.zeros_like(common))
-    return ChamberHistory(
-        time_s=common,
-        angle_rad=angle,
-        p_Pa=p,
-        T_K=_column(avg_h, avg, "(T)", "chamberAverage"),
-        volume_m3=p_int / p,
-        prescribed_volume_m3=curve.volume(angle) - dead_volume_m3,
-        mass_kg=_column(int_h, integ, "(rho)", "chamberIntegral"),
-        domain_mass_kg=_column(dom_h, dom, "(rho)", "domainMass"),
-        outflow_kg_s=flow,
-    )
-
-
-# --- the quasi-1D single chamber ----------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class SingleChamber:
-    """One closed chamber leaking into a plenum at the suction state."""
-
-    curve: VolumeCurve
-    p_suction_Pa: float
-    T_suction_K: float
-    R_J_kgK: float
-    gamma: float
-
-    @property
-    def cv(self) -> float:
-        return self.R_J_kgK / (self.gamma - 1.0)
-
-    def adiabatic_pressure(self, angle_rad) -> np.ndarray:
-        """The sealed chamber: p V^gamma constant from the suction state."""
-        v0 = self.curve.volume_m3[0]
-        return self.p_suction_Pa * (v0 / self.curve.volume(angle_rad)) ** self.gamma
-
-    def simulate(self, leak: LeakFlow | None, angle_rad) -> dict[str, np.ndarray]:
-        """p, T and m at the given angles, integrating from the suction state."""
-        from scipy.integrate import solve_ivp
-
-        c = self.curve
-        v0 = float(c.volume_m3[0])
-        m0 = self.p_suction_Pa * v0 / (self.R_J_kgK * self.T_suction_K)
-        y0 = np.array([m0, m0 * self.cv * self.T_suction_K])
-        cp = self.cv * self.gamma
-        h_plenum = cp * self.T_suction_K
-
-        def rhs(t: float, y: np.ndarray) -> np.ndarray:
-            theta = float(c.angle_of(t))
-            V = float(c.smooth_volume(theta))
-            m, U = y
-            p = (self.gamma - 1.0) * U / V
-            T = U / (m * self.cv)
-            mdot = 0.0 if leak is None else leak(p, T)
-            h_up = cp * T if mdot >= 0 else h_plenum
-            return np.array([-mdot, -mdot * h_up - p * float(c.smooth_dvdt(theta))])
-
-        times = c.time_s(angle_rad)
-        sol = solve_ivp(rhs, (0.0, float(times[-1])), y0, method=ODE_METHOD, t_eval=times,
-                        rtol=ODE_RTOL, atol=[ODE_RTOL * m0, ODE_RTOL * y0[1]],
-                        )
-        if not sol.success:
-            raise RuntimeError(f"single-chamber integration failed: {sol.message}")
-        m, U = sol.y
-        V = c.smooth_volume(angle_rad)
-        return {"p_Pa": (self.gamma - 1.0) * U / V, "T_K": U / (m * self.cv), "m_kg": m}
-
-
-def flux_leak(area_m2: float, chamber: SingleChamber, model: str, coefficient: float = 1.0,
-              zeta: float = 2.0) -> LeakFlow:
-    """The quasi-1D model's leakage (``"nozzle"`` or ``"fanno"``, rotorflow.quasi1d.flows)
-    through ``area_m2`` times ``coefficient``, into the plenum at the suction state."""
-    from rotorflow.quasi1d import flows
-
-    x_choke = flows.fanno_choke_ratio(zeta) if model == "fanno" else 0.0
-    ps = chamber.p_suction_Pa
-    rho_s = ps / (chamber.R_J_kgK * chamber.T_suction_K)
-    k = chamber.gamma
-    cl = area_m2 * coefficient
-
-    def leak(p: float, T: float) -> float:
-        rho = p / (chamber.R_J_kgK * T)
-        return cl * float(flows.signed_flux(p, rho, k, ps, rho_s, k, model, zeta, x_choke))
-
-    return leak
-
-
-def correlation_leak(fit, gap_m: float, gap_length_m: float, seal_length_m: float,
-                     chamber: SingleChamber, mu: Callable[[float], float]) -> LeakFlow:
-    """A fitted flow-coefficient correlation
-    (:class:`~rotorflow.quasi1d.calibrated.FlowCoefficientFit`) as a leakage: its mass flow
-    per metre times the sealing-line length; back flow from the plenum is the same law with
-    the plenum upstream."""
-    from .leakage import LeakagePoint
-
-    model = fit.model()
-    ps, Ts = chamber.p_suction_Pa, chamber.T_suction_K
-
-    def per_metre(p_up: float, T_up: float, p_down: float) -> float:
-        if p_up <= p_down * (1.0 + 1e-12):  # the correlation's X is 0/0 at PR = 1
-            return 0.0
-        point = LeakagePoint("chamber", gap_m, gap_length_m, p_up, T_up, p_down, mu(T_up),
-                             chamber.R_J_kgK, chamber.gamma)
-        return float(model(point))
-
-    def leak(p: float, T: float) -> float:
-        if p >= ps:
-            return seal_length_m * per_metre(p, T, ps)
-        return -seal_length_m * per_metre(ps, Ts, p)
-
-    return leak
-
+from .chamber_history import ChamberHistory, read_history, volume_curve
+from .chamber_model import adiabatic_pressure, leakage_models, model_pressure
 
 # --- comparison ---------------------------------------------------------------------------
 
@@ -351,15 +86,17 @@ class Comparison:
         }
 
 
-def compare(history: ChamberHistory, chamber: SingleChamber,
-            leaks: Mapping[str, LeakFlow]) -> Comparison:
-    """Integrate the single chamber with each leakage model and compare with the CFD."""
-    if not leaks:
+def compare(history: ChamberHistory, desc: Mapping, models: Mapping[str, Leakage]
+            ) -> Comparison:
+    """Run the product's model of the case described by ``desc`` (its ``case.json``) with
+    each of the leakage ``models`` (:func:`~.chamber_model.leakage_models`) and compare
+    it with the CFD ``history``."""
+    if not models:
         raise ValueError("no leakage models to compare")
-    preds = {name: chamber.simulate(leak, history.angle_rad)["p_Pa"]
-             for name, leak in leaks.items()}
-    return Comparison(history.angle_rad, history.p_Pa, preds, chamber.p_suction_Pa,
-                      {"sealed (p V^gamma const)": chamber.adiabatic_pressure(history.angle_rad)})
+    angles = history.angle_rad
+    preds = {name: model_pressure(desc, leakage, angles) for name, leakage in models.items()}
+    return Comparison(angles, history.p_Pa, preds, float(desc["p_suction_Pa"]),
+                      {"sealed (p V^gamma const)": adiabatic_pressure(desc, angles)})
 
 
 def write_comparison(comparison: Comparison, history: ChamberHistory, out_dir: Path,
@@ -419,58 +156,15 @@ def plot_overlay(comparison: Comparison, path: Path) -> Path:
 # --- a finished run -----------------------------------------------------------------------
 
 
-def volume_curve(desc: Mapping) -> VolumeCurve:
-    """The volume curve of a run, from its ``case.json``."""
-    return VolumeCurve(np.asarray(desc["angle_rad"], dtype=float),
-                       np.asarray(desc["volume_m3"], dtype=float), float(desc["omega_outer_rad_s"]))
-
-
-def single_chamber(desc: Mapping) -> SingleChamber:
-    """The quasi-1D chamber of a run, from its ``case.json``."""
-    return SingleChamber(volume_curve(desc), float(desc["p_suction_Pa"]),
-                         float(desc["T_suction_K"]), float(desc["R_J_kgK"]),
-                         float(desc["gamma"]))
-
-
-def leak_models(desc: Mapping, leakage=None, fit=None) -> dict[str, LeakFlow | None]:
-    """The leakage models compared with a run, named for the table.
-
-    ``leakage``: the case's quasi-1D :class:`~rotorflow.quasi1d.Leakage` (None: its
-    defaults).  Its coefficient applies to the model it names; the other model takes the
-    quasi-1D default coefficient.  ``fit``: a fitted flow-coefficient correlation
-    (:class:`~.leakage.FlowCoefficientFit`) or None.  A sealed run (gap 0) has the one
-    model "sealed".
-    """
-    from rotorflow.quasi1d import Leakage
-
-    if float(desc["gap_m"]) == 0.0:
-        return {"sealed": None}
-    chamber = single_chamber(desc)
-    leakage = leakage or Leakage()
-    default = Leakage()
-    area = float(desc["gap_m"]) * float(desc["seal_length_m"])
-    cd_nozzle = leakage.coefficient if leakage.model == "nozzle" else default.coefficient
-    cd_fanno = leakage.coefficient if leakage.model == "fanno" else default.coefficient
-    models: dict[str, LeakFlow | None] = {
-        f"nozzle (Cd={cd_nozzle:g})": flux_leak(area, chamber, "nozzle", cd_nozzle),
-        f"fanno (zeta={leakage.zeta:g}, Cd={cd_fanno:g})": flux_leak(
-            area, chamber, "fanno", cd_fanno, leakage.zeta),
-    }
-    if fit is not None:
-        from rotorflow.quasi1d.perfect_gas import PerfectGas
-
-        models["cfd-calibrated"] = correlation_leak(
-            fit, float(desc["gap_m"]), float(desc["gap_length_m"]),
-            float(desc["seal_length_m"]), chamber, PerfectGas(**desc["gas"]).mu)
-    return models
-
-
-def compare_run(case_dir: Path, leakage=None, fit=None) -> tuple[ChamberHistory, Comparison]:
-    """Read a finished chamber run and compare it with each leakage model."""
+def compare_run(case_dir: Path, leakage: Leakage | None = None, fit=None
+                ) -> tuple[ChamberHistory, Comparison]:
+    """Read a finished chamber run and compare it with the product's model under each
+    leakage model (``leakage``: the case's settings; ``fit``: the fitted correlation for
+    "cfd-calibrated", or None)."""
     case_dir = Path(case_dir)
     desc = json.loads((case_dir / "case.json").read_text())
     history = read_history(case_dir, volume_curve(desc))
-    return history, compare(history, single_chamber(desc), leak_models(desc, leakage, fit))
+    return history, compare(history, desc, leakage_models(desc, leakage, fit))
 
 
 def report_section(artifact: Path, report_dir: Path, case):
@@ -491,7 +185,8 @@ def report_section(artifact: Path, report_dir: Path, case):
         summary = json.loads(comparison.read_text())
         checks = summary.get("checks", {})
         body.append(
-            f"<p>Chamber-averaged CFD pressure against the quasi-1D model of the same chamber "
+            f"<p>Chamber-averaged CFD pressure against rotorflow's quasi-1D model run on a "
+            f"one-chamber table of the same chamber "
             f"({summary['samples']} samples, {summary['angle_start_deg']:.1f} to "
             f"{summary['angle_end_deg']:.1f} deg); closest model: "
             f"<b>{esc(summary['closest_model'])}</b>.  Mass conservation "

@@ -8,12 +8,16 @@ and ports, integrated to the machine's periodic state.
     result.summary()               # figures as a JSON-ready dict
     result.write_traces(folder)    # chamber_cycle.csv, chambers.csv
     result.plot(folder)            # p-angle and p-V PNGs
+
+``simulate_transient`` integrates the same model once over one lobe period from a given
+state, without cycle convergence (a single chamber's transient, see :mod:`.transient`).
 """
 
 from .integrate import IntegrationError
 from .result import SimulationResult, plot_cycle
 from .settings import Leakage, Numerics, Operating, Ports
 from .simulate import simulate
+from .transient import TransientResult, simulate_transient
 
 __all__ = ["IntegrationError", "Leakage", "Numerics", "Operating", "Ports", "SimulationResult",
-           "plot_cycle", "simulate"]
+           "TransientResult", "plot_cycle", "simulate", "simulate_transient"]

@@ -1,4 +1,4 @@
-"""The one entry of the chamber model: a chamber table and an operating point in, figures out."""
+"""The entry of the chamber model: a chamber table and an operating point in, figures out."""
 
 from __future__ import annotations
 
@@ -7,9 +7,26 @@ from rotorflow.errors import CaseError
 from . import cycle
 from .chamber import prepare
 from .fluids import make_fluid
-from .model import build
+from .model import ChamberModel, build
 from .result import SimulationResult, make_result
 from .settings import Leakage, Numerics, Operating, Ports
+
+
+def build_model(table, operating: Operating, leakage: Leakage | None = None,
+                ports: Ports | None = None, numerics: Numerics | None = None) -> ChamberModel:
+    """The chamber equations of ``table`` at ``operating`` (what :func:`simulate` and
+    :func:`~rotorflow.quasi1d.transient.simulate_transient` integrate); the defaults are
+    :func:`simulate`'s."""
+    if table is None:
+        raise CaseError("no chamber table: the quasi-1D model needs the geometry's chamber table")
+    leakage = leakage or Leakage(model="none")
+    ports = ports or Ports()
+    numerics = numerics or Numerics()
+    operating.check_ideal_gas()
+    geo = prepare(table, operating.volume_ratio, operating.suction_close_rad,
+                  operating.discharge_open_rad, operating.speed_rpm, numerics.vanish_fraction)
+    fluid = make_fluid(operating, geo.v_max / geo.v_discharge)
+    return build(geo, fluid, operating, leakage, ports)
 
 
 def simulate(table, operating: Operating, leakage: Leakage | None = None,
@@ -24,14 +41,5 @@ def simulate(table, operating: Operating, leakage: Leakage | None = None,
     IntegrationError.  Without ``leakage`` the chambers are sealed; without ``ports`` the
     ports are ideal; without ``numerics`` the defaults of :class:`Numerics` apply.
     """
-    if table is None:
-        raise CaseError("no chamber table: the quasi-1D model needs the geometry's chamber table")
-    leakage = leakage or Leakage(model="none")
-    ports = ports or Ports()
-    numerics = numerics or Numerics()
-    operating.check_ideal_gas()
-    geo = prepare(table, operating.volume_ratio, operating.suction_close_rad,
-                  operating.discharge_open_rad, operating.speed_rpm, numerics.vanish_fraction)
-    fluid = make_fluid(operating, geo.v_max / geo.v_discharge)
-    model = build(geo, fluid, operating, leakage, ports)
-    return make_result(cycle.solve(model, numerics))
+    model = build_model(table, operating, leakage, ports, numerics)
+    return make_result(cycle.solve(model, numerics or Numerics()))

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from rotorflow.cases import foam, gap_case, gap_mesh, gap_study
+from rotorflow.cases import foam, foam_mesh, gap_case, gap_mesh, gap_study
 from rotorflow.errors import CaseError
 from rotorflow.postprocess import leakage
 from rotorflow.quasi1d.perfect_gas import PerfectGas
@@ -52,7 +52,7 @@ def test_mesh_converts_with_named_typed_patches(tmp_path):
     # OpenFOAM's own limits are 70 degrees non-orthogonality and aspect ratio 1000.
     assert quality.max_non_orthogonality_deg < 30
     assert quality.max_aspect_ratio < 100
-    counts = foam.patch_face_counts(tmp_path)
+    counts = foam_mesh.patch_face_counts(tmp_path)
     assert counts == {"frontAndBack": 2 * 8 * 40, "lowerWall": 40, "upperWall": 40,
                       "inlet": 8, "outlet": 8}
     text = (tmp_path / "constant" / "polyMesh" / "boundary").read_text()
@@ -61,7 +61,7 @@ def test_mesh_converts_with_named_typed_patches(tmp_path):
 
 def test_mesh_checkmesh_rejects_stops_the_case(tmp_path):
     # 40000:1 cells: checkMesh fails the aspect-ratio check; the case must stop, quoting it.
-    with pytest.raises(foam.MeshCheckError, match="High aspect ratio") as err:
+    with pytest.raises(foam_mesh.MeshCheckError, match="High aspect ratio") as err:
         gap_mesh.build_foam_mesh(tmp_path, gap_mesh.parallel_channel(10e-6, 0.1),
                                  gap_mesh.GapMeshSpec(cells_across=4, cells_along=1))
     assert isinstance(err.value, CaseError)  # exit status 2 at the command line

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotorflow.cases import foam, gap_case, gap_mesh
+from rotorflow.cases import foam, foam_case, foam_mesh, gap_case, gap_mesh
 from rotorflow.errors import CaseError, ExternalRunError
 from rotorflow.postprocess import foam_output, leakage
 from rotorflow.postprocess.richardson import richardson
@@ -146,7 +146,7 @@ def test_diverged_run_is_marked_failed_with_its_log_tail():
     walls = gap_mesh.rotor_tip_gap(50e-6, 0.02)
     flow = gap_case.GapFlow(p_total_Pa=2.5e5, T_total_K=300.0, p_exit_Pa=1e5)
     case = gap_case.GapCase(walls, flow)
-    quality = foam.parse_check_mesh((DATA / "log.checkMesh").read_text())
+    quality = foam_mesh.parse_check_mesh((DATA / "log.checkMesh").read_text())
     result = gap_case.judge(DATA / "diverged", case, "laminar", quality, 50e-6, 1.0,
                             "rhoSimpleFoam failed (exit status -8)")
     assert result.status == "diverged"
@@ -155,16 +155,16 @@ def test_diverged_run_is_marked_failed_with_its_log_tail():
 
 
 def test_divergence_signs_in_logs():
-    assert gap_case.looks_diverged((DATA / "diverged" / "log.rhoSimpleFoam").read_text())
-    assert gap_case.looks_diverged("Solving for e, Initial residual = nan, Final residual")
-    assert not gap_case.looks_diverged("Solving for e, dynamic, finance, Initial residual = 1e-5")
+    assert foam_case.looks_diverged((DATA / "diverged" / "log.rhoSimpleFoam").read_text())
+    assert foam_case.looks_diverged("Solving for e, Initial residual = nan, Final residual")
+    assert not foam_case.looks_diverged("Solving for e, dynamic, finance, Initial residual = 1e-5")
 
 
 # --- checkMesh ----------------------------------------------------------------------------
 
 
 def test_check_mesh_report_of_a_good_mesh():
-    q = foam.parse_check_mesh((DATA / "log.checkMesh").read_text())
+    q = foam_mesh.parse_check_mesh((DATA / "log.checkMesh").read_text())
     assert q.ok
     assert q.cells == 16 * 40  # cells across x (2 sides x 20 along)
     assert q.max_non_orthogonality_deg == 0.0  # a rectangular channel
@@ -172,13 +172,13 @@ def test_check_mesh_report_of_a_good_mesh():
 
 
 def test_check_mesh_report_of_a_rejected_mesh():
-    q = foam.parse_check_mesh((DATA / "log.checkMesh.failed").read_text())
+    q = foam_mesh.parse_check_mesh((DATA / "log.checkMesh.failed").read_text())
     assert not q.ok
     assert any("High aspect ratio" in c for c in q.failed_checks)
 
 
 def test_unreadable_check_mesh_report_is_not_ok():
-    assert not foam.parse_check_mesh("checkMesh was killed\n").ok
+    assert not foam_mesh.parse_check_mesh("checkMesh was killed\n").ok
 
 
 # --- finding OpenFOAM ---------------------------------------------------------------------

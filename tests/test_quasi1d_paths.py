@@ -21,12 +21,11 @@ from rotorflow.geometry import table as chamber_table
 from rotorflow.geometry.table import LeakagePath
 from rotorflow.quasi1d import Leakage, Operating, Ports, simulate
 from rotorflow.quasi1d.chamber import prepare
-from rotorflow.quasi1d.fluids import IdealGas
 from rotorflow.quasi1d.model import build
-from rotorflow.quasi1d.settings import R_UNIVERSAL
+from rotorflow.quasi1d.perfect_gas import PerfectGas
 from rotorflow.quasi1d.synthetic import sin2_table
 
-GAS = IdealGas(R_UNIVERSAL / 0.02897, 1006.43)  # seed 001's perfect-gas air
+GAS = PerfectGas(molar_mass_kg_kmol=28.97, cp_J_kgK=1006.43)  # seed 001's perfect-gas air
 OP = Operating(p_suction_Pa=1e5, p_discharge_Pa=4e5, T_suction_K=300.0, speed_rpm=3000.0,
                volume_ratio=2.5)
 OP_CASE = {"p_suction_bar": 1.0, "p_discharge_bar": 4.0, "T_suction_K": 300.0,

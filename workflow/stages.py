@@ -306,7 +306,8 @@ register(Stage(
     # Uses the cfd.leakage stage's fitted flow coefficient when that stage runs too.
     after=("cfd.leakage",),
     code=("rotorflow.cases", "rotorflow.postprocess.chamber_compare",
-          "rotorflow.postprocess.leakage", "rotorflow.quasi1d"),
+          "rotorflow.postprocess.chamber_history", "rotorflow.postprocess.chamber_model",
+          "rotorflow.quasi1d", "rotorflow.geometry.table"),
     report="rotorflow.postprocess.chamber_compare:report_section",
     report_rank=70,
     figures="chamber_figures.json",

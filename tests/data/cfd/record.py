@@ -24,7 +24,7 @@ from pathlib import Path
 
 from foamlib import FoamFile
 
-from rotorflow.cases import foam, gap_case, gap_mesh, gap_study
+from rotorflow.cases import foam, foam_mesh, gap_case, gap_mesh, gap_study
 from rotorflow.errors import ExternalRunError
 from rotorflow.quasi1d.perfect_gas import PerfectGas
 
@@ -74,7 +74,7 @@ def main() -> None:
         try:
             gap_mesh.build_foam_mesh(bad, gap_mesh.parallel_channel(10e-6, 0.1),
                                      gap_mesh.GapMeshSpec(cells_across=4, cells_along=1))
-        except foam.MeshCheckError:
+        except foam_mesh.MeshCheckError:
             shutil.copy(bad / "log.checkMesh", HERE / "log.checkMesh.failed")
         else:
             sys.exit("expected checkMesh to reject the 40000:1 mesh")

@@ -1,14 +1,18 @@
 """Re-record the small OpenFOAM outputs the offline chamber tests read.
 
     .venv/bin/python tests/data/cfd/chamber/record.py      (needs OpenFOAM; about 1 min)
+    .venv/bin/python tests/data/cfd/chamber/record.py --expected-only
+                    (expected.json alone, from the recorded runs: after a change of the
+                    quasi-1D side, no OpenFOAM needed)
 
 Writes, next to this file:
     leaking/        the default case's chamber (examples/default.toml: 20 um gap, 3000 rpm)
                     through its compression phase, default mesh: case.json, result.json
                     and the function-object tables, sampled every 2 deg
     sealed/         the same chamber with the gap closed (the adiabatic-compression check)
-    expected.json   the comparison of the leaking run with the quasi-1D models, as
-                    computed when recorded: the offline test recomputes it and must agree
+    expected.json   the comparison of the leaking run with the product's quasi-1D model
+                    under each leakage model, as computed when recorded: the offline
+                    test recomputes it and must agree
 
 flow_coefficient.json (kept, not rewritten here) is the cfd-calibrated correlation the
 cfd.leakage stage fitted to the default leakage matrix (rotor-tip gaps 5-200 um, pressure
@@ -73,17 +77,24 @@ def keep(src: Path, dst: Path) -> None:
             shutil.copy(table, dst / "postProcessing" / name / "0" / file_name)
 
 
-def main() -> None:
-    logging.basicConfig(level=logging.INFO, format="%(message)s")
-    with tempfile.TemporaryDirectory() as tmp:
-        for name, sealed in (("leaking", False), ("sealed", True)):
-            result = chamber_case.run_chamber_case(recorded_case(sealed), Path(tmp) / name)
-            if not result.ok:
-                sys.exit(f"{name} run failed: {result.status} {result.message}")
-            keep(Path(tmp) / name, HERE / name)
+def write_expected() -> None:
+    """expected.json: the comparison of the recorded leaking run."""
     fit = FlowCoefficientFit.load(HERE / "flow_coefficient.json")
     _, comparison = chamber_compare.compare_run(HERE / "leaking", default_leakage(), fit)
     (HERE / "expected.json").write_text(json.dumps(comparison.summary(), indent=2) + "\n")
+
+
+def main() -> None:
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    if sys.argv[1:] != ["--expected-only"]:
+        with tempfile.TemporaryDirectory() as tmp:
+            for name, sealed in (("leaking", False), ("sealed", True)):
+                result = chamber_case.run_chamber_case(recorded_case(sealed),
+                                                       Path(tmp) / name)
+                if not result.ok:
+                    sys.exit(f"{name} run failed: {result.status} {result.message}")
+                keep(Path(tmp) / name, HERE / name)
+    write_expected()
 
 
 if __name__ == "__main__":

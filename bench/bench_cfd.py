@@ -21,13 +21,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from rotorflow.cases import foam, gap_case, gap_mesh
-from rotorflow.cases.gap_study import (
-    OUTLET_GAP_RATIO,
-    SectionPoint,
-    matrix_from_section,
-    rotor_machine,
-)
+from rotorflow.cases import foam, gap_case, gap_mesh, gap_walls
+from rotorflow.cases.gap_study import OUTLET_GAP_RATIO, SectionPoint
+from rotorflow.cases.leakage_stage import matrix_from_section, rotor_machine
 from rotorflow.postprocess.richardson import richardson
 from rotorflow.quasi1d.perfect_gas import PerfectGas
 
@@ -63,12 +59,12 @@ def cases() -> dict[str, gap_case.GapCase]:
     """Representative gaps: the analytic channel, a laminar and a turbulent rotor tip (cut
     as the leakage matrix cuts them), and a sealing-line section of the example machine
     with moving walls."""
-    tip = gap_mesh.rotor_tip_gap(50e-6, 0.02, outlet_gap_ratio=OUTLET_GAP_RATIO)
+    tip = gap_walls.rotor_tip_gap(50e-6, 0.02, outlet_gap_ratio=OUTLET_GAP_RATIO)
     tip_spec = gap_mesh.GapMeshSpec(cells_across=16, cells_along=40, along_grading=20)
     section = section_point()
     return {
         "channel-10um-PR1.005": gap_case.GapCase(
-            gap_mesh.parallel_channel(10e-6, 1e-3),
+            gap_walls.parallel_channel(10e-6, 1e-3),
             gap_case.GapFlow(1.005e5, 300.0, 1e5, gas=PerfectGas(transport="const")),
             gap_mesh.GapMeshSpec(cells_across=16, cells_along=20)),
         "tip-50um-PR1.5-laminar": gap_case.GapCase(

@@ -12,8 +12,8 @@ Layout (metres, the 2D plane; the mesh is one cell thick in z, depth ``depth_m``
                                           +--+  <- outlet: the plenum at suction pressure
 
 The chamber is a ``width_m`` by ``height_m`` rectangle (its height at the start of the
-compression).  The gap is a :class:`~rotorflow.cases.gap_mesh.GapWalls` pair (case A's
-gap geometry, e.g. :func:`~rotorflow.cases.gap_mesh.rotor_tip_gap`) turned by -90 deg so
+compression).  The gap is a :class:`~rotorflow.cases.gap_walls.GapWalls` pair (case A's
+gap geometry, e.g. :func:`~rotorflow.cases.gap_walls.rotor_tip_gap`) turned by -90 deg so
 that its inlet is an opening in the middle of the bottom wall and its flow runs in -y;
 its outlet is the plenum, a static-pressure boundary.  The bottom wall, the gap and the
 outlet never move: the chamber is split at ``fixed_height`` into a lower part around the
@@ -43,7 +43,8 @@ import numpy as np
 from rotorflow.errors import CaseError
 from rotorflow.gmsh_session import gmsh_session
 
-from .gap_mesh import GapMeshSpec, GapWalls, gap_blocks
+from .gap_mesh import GapMeshSpec, gap_blocks
+from .gap_walls import GapWalls
 
 WALL_PATCHES = ("piston", "sideWalls", "bottomWall", "gapWalls")
 

@@ -20,7 +20,7 @@ from rotorflow.quasi1d.perfect_gas import PerfectGas
 
 from .chamber_mesh import ChamberDomain, ChamberMeshSpec
 from .foam_case import digest
-from .gap_mesh import GapWalls, rotor_tip_gap
+from .gap_walls import GapWalls, rotor_tip_gap
 
 #: Version of the case this module writes: bump it when dictionaries or judgement change,
 #: so that stored results of older cases are recomputed rather than reused.

@@ -43,7 +43,7 @@ from . import foam, foam_case
 from .foam import Step
 from .foam_case import Plan
 from .foam_mesh import MeshQuality, mesh_steps
-from .gap_mesh import PATCH_TYPES, GapMeshSpec, GapWalls
+from .gap_mesh import PATCH_TYPES, GapMeshSpec
 from .gap_setup import (
     CELL_CENTRES,
     SOLVER,
@@ -53,6 +53,7 @@ from .gap_setup import (
     write_fields,
     write_files,
 )
+from .gap_walls import GapWalls
 
 #: Version of the case this module writes: bump it when dictionaries or judgement change,
 #: so that stored results of older cases are recomputed rather than reused.

@@ -30,7 +30,8 @@ from .foam_dicts import (
     uniform,
 )
 from .foam_files import write_dict, write_field
-from .gap_mesh import GapMesh, GapWalls, write_msh
+from .gap_mesh import GapMesh, write_msh
+from .gap_walls import GapWalls
 
 if TYPE_CHECKING:
     from .gap_case import GapCase, GapFlow, SolverControls

@@ -8,8 +8,9 @@ import meshio
 import numpy as np
 import pytest
 
-from rotorflow.cases import gap_mesh
-from rotorflow.cases.gap_mesh import GapMeshSpec, GapWalls
+from rotorflow.cases import gap_mesh, gap_walls
+from rotorflow.cases.gap_mesh import GapMeshSpec
+from rotorflow.cases.gap_walls import GapWalls
 from rotorflow.errors import CaseError, ExternalRunError
 from rotorflow.gmsh_session import gmsh_session
 
@@ -42,7 +43,7 @@ def test_bad_walls_are_refused(lower, upper, match):
 
 def test_cylinder_pair_geometry():
     gap, radius = 50e-6, 0.02
-    walls = gap_mesh.cylinder_pair(gap, radius, radius, 4e-3, 1e-3)
+    walls = gap_walls.cylinder_pair(gap, radius, radius, 4e-3, 1e-3)
     assert walls.throat_x == pytest.approx(0.0, abs=1e-9)
     assert walls.min_gap == pytest.approx(gap, rel=1e-9)
     # gap(x) = h + 2 (R - sqrt(R^2 - x^2)); the spline through 201 points is exact to ~1e-9.
@@ -55,19 +56,19 @@ def test_cylinder_pair_geometry():
 
 
 def test_parallel_channel_throat_is_its_middle():
-    walls = gap_mesh.parallel_channel(10e-6, 1e-3)
+    walls = gap_walls.parallel_channel(10e-6, 1e-3)
     assert walls.throat_x == pytest.approx(0.5e-3, rel=1e-3)
     assert walls.narrow_length() == pytest.approx(1e-3)
 
 
 def test_rotor_tip_gap_ends_at_the_asked_gap_ratios():
-    walls = gap_mesh.rotor_tip_gap(20e-6, 0.03, inlet_gap_ratio=15, outlet_gap_ratio=3)
+    walls = gap_walls.rotor_tip_gap(20e-6, 0.03, inlet_gap_ratio=15, outlet_gap_ratio=3)
     assert walls.gap(walls.x_inlet) == pytest.approx(15 * 20e-6, rel=1e-6)
     assert walls.gap(walls.x_outlet) == pytest.approx(3 * 20e-6, rel=1e-6)
 
 
 def test_extension_continues_the_walls_straight():
-    walls = gap_mesh.cylinder_pair(50e-6, 0.02, 0.02, 2e-3)
+    walls = gap_walls.cylinder_pair(50e-6, 0.02, 0.02, 2e-3)
     ext = walls.extended(inlet_m=1e-3, outlet_m=0.5e-3)
     assert ext.x_inlet == pytest.approx(walls.x_inlet - 1e-3)
     assert ext.x_outlet == pytest.approx(walls.x_outlet + 0.5e-3)
@@ -129,7 +130,7 @@ def read_mesh(path):
 @pytest.mark.gmsh
 def test_channel_mesh_cells_groups_and_wall_grading(tmp_path):
     spec = GapMeshSpec(cells_across=8, wall_grading=3.0, cells_along=5)
-    walls = gap_mesh.parallel_channel(10e-6, 1e-3)
+    walls = gap_walls.parallel_channel(10e-6, 1e-3)
     result = gap_mesh.write_msh(walls, spec, tmp_path / "gap.msh")
     assert result.cells == 8 * 10
     assert (tmp_path / "log.gmsh").is_file()
@@ -152,7 +153,7 @@ def test_channel_mesh_cells_groups_and_wall_grading(tmp_path):
 def test_refined_mesh_nests_the_default_one(tmp_path):
     # Richardson needs the same spacing law at every level: the default mesh's node rows
     # must be every other row of the mesh refined by 2.
-    walls = gap_mesh.parallel_channel(10e-6, 1e-3)
+    walls = gap_walls.parallel_channel(10e-6, 1e-3)
     spec = GapMeshSpec(cells_across=8, wall_grading=3.0, cells_along=5)
     rows = []
     for factor, name in ((1.0, "a"), (2.0, "b")):
@@ -163,7 +164,7 @@ def test_refined_mesh_nests_the_default_one(tmp_path):
 
 @pytest.mark.gmsh
 def test_curved_gap_mesh_stays_between_the_walls(tmp_path):
-    walls = gap_mesh.rotor_tip_gap(50e-6, 0.02)
+    walls = gap_walls.rotor_tip_gap(50e-6, 0.02)
     spec = GapMeshSpec(cells_across=8, cells_along=20, along_grading=20)
     result = gap_mesh.write_msh(walls, spec, tmp_path / "gap.msh")
     pts = meshio.read(result.path).points
@@ -203,7 +204,8 @@ def test_leakage_matrix_spans_the_issue_ranges():
 
 
 def test_cfd_section_of_a_case_file():
-    from rotorflow.cases.gap_study import default_matrix, matrix_from_section
+    from rotorflow.cases.gap_study import default_matrix
+    from rotorflow.cases.leakage_stage import matrix_from_section
 
     assert matrix_from_section({}) == default_matrix()
     points = matrix_from_section({"gap_um": [5, 50], "pressure_ratio": [1.5, 3.0]})

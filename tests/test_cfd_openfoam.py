@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from rotorflow.cases import foam, foam_mesh, gap_case, gap_mesh, gap_study
+from rotorflow.cases import foam, foam_mesh, gap_case, gap_mesh, gap_study, gap_walls
 from rotorflow.errors import CaseError
 from rotorflow.postprocess import leakage
 from rotorflow.quasi1d.perfect_gas import PerfectGas
@@ -30,7 +30,7 @@ SPEC = gap_mesh.GapMeshSpec(cells_across=16, cells_along=20)
 def channel_case(wall_speed: float = 0.0) -> gap_case.GapCase:
     flow = gap_case.GapFlow(p_total_Pa=1.005 * P_EXIT, T_total_K=T0, p_exit_Pa=P_EXIT, gas=AIR,
                             wall_speed_lower_m_s=wall_speed)
-    return gap_case.GapCase(gap_mesh.parallel_channel(GAP, LENGTH), flow, SPEC)
+    return gap_case.GapCase(gap_walls.parallel_channel(GAP, LENGTH), flow, SPEC)
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,7 @@ def test_openfoam_version_is_reported():
 
 
 def test_mesh_converts_with_named_typed_patches(tmp_path):
-    walls = gap_mesh.rotor_tip_gap(50e-6, 0.02)
+    walls = gap_walls.rotor_tip_gap(50e-6, 0.02)
     mesh, quality = gap_mesh.build_foam_mesh(tmp_path, walls, gap_mesh.GapMeshSpec(
         cells_across=8, cells_along=20, along_grading=20))
     assert quality.ok and quality.cells == mesh.cells == 8 * 40
@@ -62,7 +62,7 @@ def test_mesh_converts_with_named_typed_patches(tmp_path):
 def test_mesh_checkmesh_rejects_stops_the_case(tmp_path):
     # 40000:1 cells: checkMesh fails the aspect-ratio check; the case must stop, quoting it.
     with pytest.raises(foam_mesh.MeshCheckError, match="High aspect ratio") as err:
-        gap_mesh.build_foam_mesh(tmp_path, gap_mesh.parallel_channel(10e-6, 0.1),
+        gap_mesh.build_foam_mesh(tmp_path, gap_walls.parallel_channel(10e-6, 0.1),
                                  gap_mesh.GapMeshSpec(cells_across=4, cells_along=1))
     assert isinstance(err.value, CaseError)  # exit status 2 at the command line
 
@@ -96,7 +96,7 @@ def test_sliding_wall_adds_the_couette_flow(channel_study, tmp_path):
 
 
 def test_rotor_tip_gap_runs_and_stays_below_the_ideal_nozzle(tmp_path):
-    walls = gap_mesh.rotor_tip_gap(50e-6, 0.02)
+    walls = gap_walls.rotor_tip_gap(50e-6, 0.02)
     flow = gap_case.GapFlow(p_total_Pa=2.0e5, T_total_K=T0, p_exit_Pa=1.0e5)
     spec = gap_mesh.GapMeshSpec(cells_across=16, cells_along=40, along_grading=20)
     result = gap_case.run_gap_case(gap_case.GapCase(walls, flow, spec), tmp_path / "tip")

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotorflow.cases import foam, foam_case, foam_mesh, gap_case, gap_mesh
+from rotorflow.cases import foam, foam_case, foam_mesh, gap_case, gap_walls
 from rotorflow.errors import CaseError, ExternalRunError
 from rotorflow.postprocess import foam_output, leakage
 from rotorflow.postprocess.richardson import richardson
@@ -143,7 +143,7 @@ def test_channel_comparison_fails_on_perturbed_data(tmp_path):
 
 
 def test_diverged_run_is_marked_failed_with_its_log_tail():
-    walls = gap_mesh.rotor_tip_gap(50e-6, 0.02)
+    walls = gap_walls.rotor_tip_gap(50e-6, 0.02)
     flow = gap_case.GapFlow(p_total_Pa=2.5e5, T_total_K=300.0, p_exit_Pa=1e5)
     case = gap_case.GapCase(walls, flow)
     quality = foam_mesh.parse_check_mesh((DATA / "log.checkMesh").read_text())
@@ -203,7 +203,7 @@ def test_a_study_with_a_failed_run_is_never_used():
 
     results = [gap_case.GapResult.from_json((STUDY / lvl / "result.json").read_text())
                for lvl in LEVELS]
-    case = gap_case.GapCase(gap_mesh.parallel_channel(PARAMS["gap_m"], PARAMS["length_m"]),
+    case = gap_case.GapCase(gap_walls.parallel_channel(PARAMS["gap_m"], PARAMS["length_m"]),
                             gap_case.GapFlow(PARAMS["p_total_Pa"], PARAMS["T_total_K"],
                                              PARAMS["p_exit_Pa"]))
     good = MeshStudy("good", case, tuple(results), 2.0)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from rotorflow.cases import chamber_case, foam, foam_case, gap_case, gap_mesh
+from rotorflow.cases import chamber_case, foam, foam_case, gap_case, gap_walls
 from rotorflow.cases.foam import Step
 from rotorflow.errors import ExternalRunError
 
@@ -60,7 +60,7 @@ def _case_folder(tmp_path: Path) -> Path:
 
 def _gap_case() -> gap_case.GapCase:
     flow = gap_case.GapFlow(p_total_Pa=2.0e5, T_total_K=300.0, p_exit_Pa=1.0e5)
-    return gap_case.GapCase(gap_mesh.rotor_tip_gap(50e-6, 0.02), flow)
+    return gap_case.GapCase(gap_walls.rotor_tip_gap(50e-6, 0.02), flow)
 
 
 def _chamber_case(gap_m: float | None = None) -> chamber_case.ChamberCase:

@@ -7,13 +7,8 @@ import math
 
 import pytest
 
-from rotorflow.cases.gap_study import (
-    MatrixPoint,
-    RotorMachine,
-    SectionPoint,
-    matrix_from_section,
-    rotor_machine,
-)
+from rotorflow.cases.gap_study import MatrixPoint, RotorMachine, SectionPoint
+from rotorflow.cases.leakage_stage import matrix_from_section, rotor_machine
 from rotorflow.errors import CaseError
 from rotorflow.geometry.internal_gear.pair import PinGerotor, sigma_limit
 from rotorflow.geometry.internal_gear.sealing_gap import sealing_wall_speeds

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rotorflow.cases.gap_mesh import GapWalls
+from rotorflow.cases.gap_walls import GapWalls
 from rotorflow.errors import CaseError
 from rotorflow.geometry.internal_gear.pair import PinGerotor, sigma_limit
 from rotorflow.geometry.internal_gear.sealing_gap import sealing_gap_walls, sealing_wall_speeds

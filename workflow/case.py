@@ -200,7 +200,7 @@ def validate_stage_sections(data: dict, path: Path, pair: RotorPair | None = Non
 
         Export.from_section(data["export"], str(path))
     if "cfd" in data:  # owned by the CFD leakage stage
-        from rotorflow.cases.gap_study import validate_section
+        from rotorflow.cases.leakage_stage import validate_section
 
         validate_section(data, str(path), pair)
     if "cfd_chamber" in data:  # owned by the CFD chamber stage

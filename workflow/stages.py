@@ -274,7 +274,7 @@ def _has_cfd(raw: dict) -> str | None:
 
 register(Stage(
     name="cfd.leakage",
-    run="rotorflow.cases.gap_study:run_stage",
+    run="rotorflow.cases.leakage_stage:run_stage",
     description="OpenFOAM leakage matrix, Richardson studies, quasi-1D comparison, Cd fit",
     # Tip gaps are generic (gap, pressure ratio, wall radius, wall speed); sealing-line
     # sections are cut from [machine], their walls move at the rotor speed of

@@ -11,7 +11,7 @@ younger one, so the flow of a compressor's leakage runs toward +x.  Both walls a
 true rotor profiles: the lower one the inner rotor, the upper one the outer rotor (pin 0
 and, past the pin's edges, its fillets), as polylines y(x) over the same x range, cut
 where the gap has opened to ``inlet_ratio`` and ``outlet_ratio`` times its minimum,
-ready for :class:`rotorflow.cases.gap_mesh.GapWalls`.
+ready for :class:`rotorflow.cases.gap_walls.GapWalls`.
 
 Where no such section exists the functions raise a CaseError naming the angle and the
 reason.  At sigma_bar = 1 the inner profile has a point of zero arc-length speed and

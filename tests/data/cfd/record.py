@@ -24,7 +24,7 @@ from pathlib import Path
 
 from foamlib import FoamFile
 
-from rotorflow.cases import foam, foam_mesh, gap_case, gap_mesh, gap_study
+from rotorflow.cases import foam, foam_mesh, gap_case, gap_mesh, gap_study, gap_walls
 from rotorflow.errors import ExternalRunError
 from rotorflow.quasi1d.perfect_gas import PerfectGas
 
@@ -42,7 +42,7 @@ def channel_case() -> gap_case.GapCase:
     flow = gap_case.GapFlow(p_total_Pa=c["p_total_Pa"], T_total_K=c["T_total_K"],
                             p_exit_Pa=c["p_exit_Pa"], gas=PerfectGas(transport="const"))
     mesh = gap_mesh.GapMeshSpec(cells_across=c["cells_across"], cells_along=c["cells_along"])
-    return gap_case.GapCase(gap_mesh.parallel_channel(c["gap_m"], c["length_m"]), flow, mesh)
+    return gap_case.GapCase(gap_walls.parallel_channel(c["gap_m"], c["length_m"]), flow, mesh)
 
 
 def keep_tables(src: Path, dst: Path) -> None:
@@ -72,7 +72,7 @@ def main() -> None:
         bad = work / "bad"
         bad.mkdir()
         try:
-            gap_mesh.build_foam_mesh(bad, gap_mesh.parallel_channel(10e-6, 0.1),
+            gap_mesh.build_foam_mesh(bad, gap_walls.parallel_channel(10e-6, 0.1),
                                      gap_mesh.GapMeshSpec(cells_across=4, cells_along=1))
         except foam_mesh.MeshCheckError:
             shutil.copy(bad / "log.checkMesh", HERE / "log.checkMesh.failed")
@@ -80,7 +80,7 @@ def main() -> None:
             sys.exit("expected checkMesh to reject the 40000:1 mesh")
 
         div = work / "diverged"
-        walls = gap_mesh.rotor_tip_gap(50e-6, 0.02)
+        walls = gap_walls.rotor_tip_gap(50e-6, 0.02)
         flow = gap_case.GapFlow(p_total_Pa=2.5e5, T_total_K=300.0, p_exit_Pa=1e5,
                                 turbulence="laminar")
         unstable = gap_case.GapCase(walls, flow, gap_mesh.GapMeshSpec(refinement=2.0))

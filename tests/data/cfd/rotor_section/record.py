@@ -4,7 +4,7 @@
 
 (needs OpenFOAM; about a minute; with RUNS_DIR, a [cfd] runs_dir that holds the two
 points already, nothing is run).  The points: the sealing-line gap of the example machine
-of cases/cfd_leakage.toml at outer-rotor angle 300 deg (next to the inner rotor's sharp
+of examples/cfd_leakage.toml at outer-rotor angle 300 deg (next to the inner rotor's sharp
 edge of sigma_bar = 1), 10 um clearance on the outer rotor, pressure ratio 1.2; static
 walls, and walls at the rotor surface speeds of 5000 rpm (outer rotor).
 

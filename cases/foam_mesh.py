@@ -107,11 +107,6 @@ def convert(case_dir: Path, msh_name: str, patch_types: Mapping[str, str],
     return drain(mesh_steps(msh_name, patch_types, cells), case_dir)["checkMesh"]
 
 
-def check_mesh(case_dir: Path) -> MeshQuality:
-    """Run checkMesh; a failed check raises MeshCheckError quoting checkMesh's complaints."""
-    return drain([Step(("checkMesh",), then=judge_check_mesh)], case_dir)["checkMesh"]
-
-
 def set_patch_types(case_dir: Path, types: Mapping[str, str]) -> None:
     """Set the ``type`` of named patches in ``constant/polyMesh/boundary``.
 

@@ -28,10 +28,6 @@ log = logging.getLogger(__name__)
 DEFAULT_BUILD = Path("build")
 
 
-class StageFailed(RotorflowError):
-    """A stage raised; the message names the stage and its error."""
-
-
 def resolve(ref: str) -> Callable:
     module, _, func = ref.partition(":")
     return getattr(importlib.import_module(module), func)

@@ -13,6 +13,7 @@ MODULES = (
     "bench.bench_quasi1d",
     "bench.bench_solids",
     "bench.bench_cfd",
+    "bench.bench_workflow",
 )
 
 

@@ -23,15 +23,17 @@ from rotorflow.geometry.twin_screw import (
     Gearing,
     Line,
     MaleGenerated,
+    OnRotor,
     ParabolaArc,
     RackGenerated,
+    TwinProfile,
     rack_pair,
     symmetric_circular_pair,
     symmetric_circular_rack,
 )
 from rotorflow.geometry.twin_screw.asymmetric import asymmetric_pair
 from rotorflow.geometry.twin_screw.meshing import check_no_undercut
-from rotorflow.geometry.twin_screw.profiles import check_no_interference
+from rotorflow.geometry.twin_screw.profiles import check_no_interference, check_no_loop
 
 #: The 4/6 compressor of seed 004 (Table 1a): outer diameters 100 and 96 mm.  The paper
 #: gives no centre distance; 78 mm is assumed, which puts the female tip 1.2 mm and the
@@ -340,3 +342,16 @@ def test_tangents_are_the_derivatives_of_the_points():
                                    g, reverse=True))
     for piece in generated:
         assert agree(piece, 1), piece.name
+
+
+def test_a_lobe_that_crosses_itself_is_a_named_loop():
+    """A bow-tie lobe of primary arcs on the rotor: its two diagonals cross."""
+    corners = [(0.01, -0.01), (0.03, 0.01), (0.03, -0.01), (0.01, 0.01)]
+    names = ["rising", "down", "diagonal", "back"]
+    lines = [OnRotor(Line(n, corners[k], corners[(k + 1) % 4]), "male")
+             for k, n in enumerate(names)]
+    bow_tie = TwinProfile("male", tuple(lines), 1)
+    with pytest.raises(CaseError, match=r"loop: the male profile crosses itself between the "
+                                        r"male primary arc 'rising' .* and the male primary "
+                                        r"arc 'diagonal'"):
+        check_no_loop(bow_tie, C)

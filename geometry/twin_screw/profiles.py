@@ -99,14 +99,6 @@ def check_no_loop(profile: TwinProfile, scale: float) -> None:
                         f"{profile.piece_name(u[j])} (u = {u[j]:.4f})")
 
 
-def placed(profile, gearing: Gearing, theta: float):
-    """Function mapping a rotor's own-frame points into the fixed frame at male angle
-    theta (male about O1 by theta, female about O2 by -theta r1 / r2)."""
-    if profile.name == "male":
-        return lambda p: rotate(p, theta)
-    return lambda p: rotate(p, -theta * gearing.r1 / gearing.r2) + gearing.female_axis
-
-
 def signed_gap(male, female, gearing: Gearing, thetas, tol: float):
     """Smallest signed distance from the male profile (sampled to ``tol``) to the true
     female curve at each male angle of ``thetas`` (negative: overlap), and the male

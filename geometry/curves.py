@@ -352,6 +352,8 @@ def sample(curve, tol: float, max_step: float = math.inf) -> np.ndarray:
         kap = np.where(np.isfinite(kap), kap, 0.0)
         dens = np.maximum(np.sqrt(kap / (8.0 * tol)), 1.0 / max_step) * speed
         cum = np.concatenate([[0.0], np.cumsum(0.5 * (dens[1:] + dens[:-1]) * np.diff(u))])
+        if not cum[-1] > 0.0:  # a straight piece and no max_step: spread by parameter
+            cum = t.copy()
         m = max(int(math.ceil(cum[-1] * 1.05)), 1)
         us = np.interp(np.linspace(0.0, cum[-1], m + 1), cum, j + t)
         us[-1] = j + 1.0

@@ -112,12 +112,9 @@ def power_split(
                            machine.points_per_period * machine.section_refinement)
     shaft = -tq
     rotors = machine.pair.rotors
-    power = [r.speed_ratio * shaft[:, i] for i, r in enumerate(rotors)]
-    power[0] = shaft[:, 0]  # the reference rotor's ratio is 1: no product to round
-    p_in = power[0]
-    for extra in power[1:]:
-        p_in = p_in + extra
-    ratio = np.stack([x / p_in for x in power], 1)
+    power = np.stack([r.speed_ratio * shaft[:, i] for i, r in enumerate(rotors)], 1)
+    p_in = power.sum(1)
+    ratio = power / p_in[:, None]
     # Eq. 18 with the cycle work of the chamber's own p-V loop; for a conjugate pair
     # (no clearance volume) it equals the closed form of Eq. 17 (see tests).
     c = machine.curves

@@ -40,8 +40,7 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
     k_max = int(np.argmax(cur.volume))
     suction_close = phi[np.nonzero(cur.area_lp > 0.0)[0][-1]]
     discharge_open = phi[np.nonzero(cur.area_hp > 0.0)[0][0]]
-    wraps = {f"wrap_{r.name}_deg": _deg(m.sweep.wrap * abs(r.speed_ratio)) if i else
-             _deg(m.sweep.wrap) for i, r in enumerate(pair.rotors)}
+    wraps = {f"wrap_{r.name}_deg": _deg(m.sweep.wrap * abs(r.speed_ratio)) for r in pair.rotors}
     return {
         "case": case.name,
         "machine": pair.family,

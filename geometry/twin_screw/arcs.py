@@ -13,10 +13,11 @@ has a ``name`` so that an error in what it generates can say which arc it was.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from ..planar import rotate
 
 
 def _stack(x, y):
@@ -88,9 +89,7 @@ class EllipseArc:
             local = span * _stack(-self.semi_major * s, self.semi_minor * c)
         else:
             local = -span * span * _stack(self.semi_major * c, self.semi_minor * s)
-        ct, st = math.cos(self.tilt), math.sin(self.tilt)
-        out = _stack(ct * local[..., 0] - st * local[..., 1],
-                     st * local[..., 0] + ct * local[..., 1])
+        out = rotate(local, self.tilt)
         return out + np.asarray(self.centre) if order == 0 else out
 
 
@@ -117,9 +116,7 @@ class ParabolaArc:
             local = _stack(np.full_like(w, span), 2.0 * k * w * span)
         else:
             local = _stack(np.zeros_like(w), np.full_like(w, 2.0 * k * span * span))
-        ct, st = math.cos(self.tilt), math.sin(self.tilt)
-        out = _stack(ct * local[..., 0] - st * local[..., 1],
-                     st * local[..., 0] + ct * local[..., 1])
+        out = rotate(local, self.tilt)
         return out + np.asarray(self.vertex) if order == 0 else out
 
 

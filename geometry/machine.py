@@ -231,12 +231,38 @@ class SweptMachine:
         see :class:`.section.SectionChamber`).  A contact point c(psi) of the section
         sweeps the space curve (scale(z) c(phi - twist(z)), z); its length element is
         sqrt(1 + |scale' c - scale twist' c'|^2) dz, counted where the chamber exists
-        and booked to the chamber beyond that contact at that height.
+        and booked to the chamber beyond that contact at that height.  An offset of 0
+        (no chamber beyond: the family follows that contact as a track) is no line.
 
         A line seen from both sides must have one length: where a chamber's section
         has sub-regions, only its outermost contacts are followed, so its neighbour may
         see more of their common line; both take the larger view.
         """
+        sec = self.section
+        lines: dict[int, np.ndarray] = {}
+        for which, offsets in (("lead", sec.lead_offset), ("trail", sec.trail_offset)):
+            pts = sec.lead if which == "lead" else sec.trail
+            for d, v in self._line_lengths(pts, sec.contact_rate(which), offsets).items():
+                if d != 0:
+                    lines[d] = lines.get(d, 0.0) + v
+        return _symmetric(lines, self.points_per_period) if lines else {}
+
+    @cached_property
+    def track_lines(self) -> dict[tuple[str, int], np.ndarray]:
+        """Lengths of the section's further sealing lines (:class:`.section.Track`),
+        keyed by (track name, offset of the chamber beyond), like :attr:`seal_lines`."""
+        sec = self.section
+        out: dict[tuple[str, int], np.ndarray] = {}
+        for track in sec.tracks:
+            lines = self._line_lengths(track.points, sec.contact_rate(track), track.offset,
+                                       track.present)
+            for d, v in lines.items():
+                if d != 0:
+                    out[(track.name, d)] = out.get((track.name, d), 0.0) + v
+        return out
+
+    def _line_lengths(self, pts, rate, offsets, present=None) -> dict[int, np.ndarray]:
+        """Per offset beyond, the length of the line point ``pts`` sweeps (seal_lines)."""
         sec = self.section
         sw = self.sweep
         phi = self.curves.phi
@@ -247,18 +273,14 @@ class SweptMachine:
         ds, dt = sw.dscale(z)[None, :], sw.dtwist(z)[None, :]
         h = sec.psi[1] - sec.psi[0]
         node = np.clip(np.rint((psi - sec.psi[0]) / h).astype(int), 0, len(sec.psi) - 1)
-        lines: dict[int, np.ndarray] = {}
-        for which, offsets in (("lead", sec.lead_offset), ("trail", sec.trail_offset)):
-            pts = sec.lead if which == "lead" else sec.trail
-            rate = sec.contact_rate(which)
-            c = np.stack([_linear(sec, pts[:, i], psi) for i in (0, 1)], -1)
-            dc = np.stack([_linear(sec, rate[:, i], psi) for i in (0, 1)], -1)
-            tang = ds[..., None] * c - (s[None, :] * dt)[..., None] * dc
-            elem = np.sqrt(1.0 + np.sum(tang * tang, -1)) * alive
-            label = offsets[node]
-            for d in np.unique(label[alive]):
-                lines[int(d)] = lines.get(int(d), 0.0) + (elem * (label == d)) @ wz
-        return _symmetric(lines, self.points_per_period)
+        if present is not None:
+            alive = alive & present[node]
+        c = np.stack([_linear(sec, pts[:, i], psi) for i in (0, 1)], -1)
+        dc = np.stack([_linear(sec, rate[:, i], psi) for i in (0, 1)], -1)
+        tang = ds[..., None] * c - (s[None, :] * dt)[..., None] * dc
+        elem = np.sqrt(1.0 + np.sum(tang * tang, -1)) * alive
+        label = offsets[node]
+        return {int(d): (elem * (label == d)) @ wz for d in np.unique(label[alive])}
 
     # ----------------------------------------------------------------- summary figures
     def volume_at(self, phi) -> np.ndarray:

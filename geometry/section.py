@@ -22,6 +22,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
+
+@dataclass(frozen=True)
+class Track:
+    """A sealing point of the section chamber other than its leading and trailing
+    interlobe contacts (a family's tips, its second contacts, ...), on the same grid.
+
+    ``name`` names the line (table columns and leakage paths use it), ``kind`` is its
+    leakage kind; ``present`` says where the chamber has that point at all (a tip that
+    has left its bore seals nothing); ``offset`` and ``ids`` as for the lead and trail.
+    """
+
+    name: str
+    kind: str
+    points: np.ndarray  # (n, 2)
+    present: np.ndarray  # (n,) bool
+    offset: np.ndarray  # (n,) int
+    ids: np.ndarray  # (n,) int
+
 #: Default angle samples per lobe period of the section tables.
 POINTS_PER_PERIOD = 96
 
@@ -46,16 +64,22 @@ class SectionChamber:
     trail_id: np.ndarray
     lead_kind: np.ndarray
     trail_kind: np.ndarray
+    #: Further sealing points (:class:`Track`); the lead and trail contacts are always
+    #: followed, these where ``present``.
+    tracks: tuple = ()
 
-    def contact_rate(self, which: str) -> np.ndarray:
+    def contact_rate(self, which: str | Track) -> np.ndarray:
         """d(contact point)/d(psi) of the leading or trailing contact, on the grid.
 
         Where the contact changes identity (a contact hands over to another, or a
         sub-region closes) the point jumps across the chamber; that jump is no sealing
         line, so differences never cross it.
         """
-        pts = self.lead if which == "lead" else self.trail
-        ids = self.lead_id if which == "lead" else self.trail_id
+        if isinstance(which, Track):
+            pts, ids = which.points, which.ids
+        else:
+            pts = self.lead if which == "lead" else self.trail
+            ids = self.lead_id if which == "lead" else self.trail_id
         h = self.psi[1] - self.psi[0]
         d = np.diff(pts, axis=0) / h
         same = (ids[1:] == ids[:-1])[:, None]

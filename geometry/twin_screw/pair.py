@@ -1,0 +1,263 @@
+"""A twin-screw rotor pair on the family seam (seeds 003, 004).
+
+Frames (metres, radians): the male axis O1 at the origin, the female axis O2 at (C, 0)
+(see :mod:`.meshing`); the male turns counter-clockwise by ``psi``, the female clockwise
+by ``psi N1 / N2``; rotor 0, the reference, is the male.  Each rotor turns in its own
+bore, of its outer radius (zero tip clearance: clearances are the leakage model's), and
+the two bores intersect at the cusps (x_c, +-y_c).
+
+What the seam asks of the pair is built here from :mod:`.regions` (the section cut into
+groove parts) and :mod:`.section` (one chamber's tables over its life).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from rotorflow.errors import CaseError
+
+from ..family import Rotor, RotorPair
+from ..planar import TWO_PI, cross, rotate
+from .meshing import Gearing
+from .profiles import TwinProfile
+
+#: Samples per lobe on which a lobe's tip (largest radius) is bracketed before it is
+#: polished; a tip is narrower than a lobe by far more than 1/512.
+TIP_SCAN = 512
+#: Half-width (in profile parameter) of the window in which a contact is sought around
+#: its polygon estimate: a few polygon edges.
+CONTACT_WINDOW = 0.02
+#: Points of that window on which the law of gearing is bracketed.
+CONTACT_GRID = 17
+#: Parameter tolerance of a contact: 1e-13 of a piece is far below a nanometre.
+CONTACT_XTOL = 1e-13
+
+
+def _illinois(f, a, b, fa, fb, iterations: int = 60) -> float:
+    """A root of f in [a, b] (f(a), f(b) of opposite signs): regula falsi with the
+    Illinois modification (superlinear, never leaves the bracket)."""
+    side = 0
+    c = a
+    for _ in range(iterations):
+        c = (a * fb - b * fa) / (fb - fa)
+        fc = float(f(c)[0])
+        if fc == 0.0 or abs(b - a) < CONTACT_XTOL:
+            break
+        if np.sign(fc) == np.sign(fb):
+            b, fb = c, fc
+            if side == -1:
+                fa *= 0.5
+            side = -1
+        else:
+            a, fa = c, fc
+            if side == 1:
+                fb *= 0.5
+            side = 1
+        if abs(b - a) < CONTACT_XTOL:
+            break
+    return float(c)
+
+
+@dataclass(frozen=True)
+class TwinScrewPair(RotorPair):
+    """Male and female profiles of one gearing, with their bores."""
+
+    family = "twin-screw"
+
+    gearing: Gearing
+    male: TwinProfile
+    female: TwinProfile
+    label: str = "twin-screw"
+
+    def __post_init__(self):
+        if self.male.lobes != self.gearing.lobes_male or \
+                self.female.lobes != self.gearing.lobes_female:
+            raise CaseError("the profiles' lobe counts differ from the gearing's")
+        if self.male_radius + self.female_radius <= self.gearing.centre_distance:
+            raise CaseError("the bores do not intersect: the rotors never mesh")
+
+    # ------------------------------------------------------------ dimensions
+    @property
+    def diameter(self) -> float:
+        """The male's outer diameter (the family's figures are normalised by it)."""
+        return 2.0 * self.male_radius
+
+    @cached_property
+    def male_radius(self) -> float:
+        return self._tip(self.male)[1]
+
+    @cached_property
+    def female_radius(self) -> float:
+        return self._tip(self.female)[1]
+
+    @cached_property
+    def cusp(self) -> tuple[float, float]:
+        c, r1, r2 = self.gearing.centre_distance, self.male_radius, self.female_radius
+        x = (c * c + r1 * r1 - r2 * r2) / (2.0 * c)
+        return x, math.sqrt(r1 * r1 - x * x)
+
+    def _tip(self, profile: TwinProfile) -> tuple[float, float]:
+        """(u, radius) of lobe 0's tip: its largest radius, polished."""
+        per = len(profile.pieces)
+        u = np.linspace(0.0, per, TIP_SCAN * per, endpoint=False)
+        r = np.linalg.norm(profile.point(u), axis=-1)
+        k = int(np.argmax(r))
+        h = per / (TIP_SCAN * per)
+        res = minimize_scalar(lambda x: -float(np.linalg.norm(profile.point(np.array([x]))[0])),
+                              bounds=(u[k] - h, u[k] + h), method="bounded",
+                              options={"xatol": 1e-13})
+        return float(res.x), -float(res.fun)
+
+    def tip_points(self, profile: TwinProfile) -> np.ndarray:
+        """Every lobe's tip point in the rotor's own frame, lobe order."""
+        return self._tips[0 if profile is self.male else 1]
+
+    @cached_property
+    def _tips(self):
+        return tuple(self._tip_points(p) for p in (self.male, self.female))
+
+    def _tip_points(self, profile: TwinProfile) -> np.ndarray:
+        u0, _ = self._tip(profile)
+        p = profile.point(np.array([u0]))[0]
+        return rotate(p[None, :], TWO_PI * np.arange(profile.lobes) / profile.lobes)
+
+    def tip_angle(self, rotor: int) -> float:
+        profile = self.male if rotor == 0 else self.female
+        p = self.tip_points(profile)[0]
+        return math.atan2(p[1], p[0])
+
+    # ------------------------------------------------------------ contacts
+    def contact_near(self, x, psi: float) -> np.ndarray:
+        """The contact point of the rotors near ``x`` at male angle ``psi`` (fixed frame).
+
+        At a contact the male's normal passes through the pitch point (the law of
+        gearing), which holds for every conjugate arc whatever generated it; the root
+        is sought on the male profile around the sampled point nearest ``x``.
+        """
+        male = self.male
+        local = rotate(np.asarray(x, dtype=float)[None, :], -psi)[0]
+        u_grid, p_grid = self._foot_grid
+        u0 = float(u_grid[int(np.argmin(np.linalg.norm(p_grid - local, axis=-1)))])
+        pitch = rotate(self.gearing.pitch_point[None, :], -psi)[0]
+
+        def law(u):
+            u = np.atleast_1d(u)
+            return cross(male.normal(u), pitch - male.point(u))
+
+        grid = np.linspace(u0 - CONTACT_WINDOW, u0 + CONTACT_WINDOW, CONTACT_GRID)
+        vals = law(grid)
+        sign = np.nonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[0]
+        if not len(sign):
+            return np.asarray(x, dtype=float)  # no contact here: keep the polygon's corner
+        j = int(sign[np.argmin(np.abs(grid[sign] - u0))])
+        u = _illinois(law, grid[j], grid[j + 1], vals[j], vals[j + 1])
+        return rotate(male.point(np.array([u])), psi)[0]
+
+    def contact_between(self, u_poly, lo: int, hi: int, m: int, psi: float) -> np.ndarray:
+        """The contact point on the male between polygon vertices ``lo`` and ``hi``
+        (indices into ``u_poly``, a closed polygon of ``m`` vertices, running up from
+        lo to hi): the root of the law of gearing nearest the middle (fixed frame)."""
+        male = self.male
+        ulo = float(u_poly[lo])
+        uhi = float(u_poly[hi]) + (male.n if hi < lo else 0.0)
+        pitch = rotate(self.gearing.pitch_point[None, :], -psi)[0]
+
+        def law(u):
+            u = np.mod(np.atleast_1d(u), male.n)
+            return cross(male.normal(u), pitch - male.point(u))
+
+        grid = np.linspace(ulo, uhi, CONTACT_GRID)
+        vals = law(grid)
+        sign = np.nonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[0]
+        mid = 0.5 * (ulo + uhi)
+        if len(sign):
+            j = int(sign[np.argmin(np.abs(grid[sign] - mid))])
+            u = _illinois(law, grid[j], grid[j + 1], vals[j], vals[j + 1])
+        else:
+            u = mid
+        return rotate(male.point(np.array([np.mod(u, male.n)])), psi)[0]
+
+    @cached_property
+    def _foot_grid(self):
+        from ..curves import sample
+
+        u = sample(self.male, 1e-5 * self.gearing.centre_distance)
+        return u, self.male.point(u)
+
+    # ------------------------------------------------------------ the family seam
+    @cached_property
+    def rotors(self) -> tuple[Rotor, Rotor]:
+        g = self.gearing
+        return (Rotor("male", self.male, (0.0, 0.0), g.lobes_male, 1.0, g.r1),
+                Rotor("female", self.female, (g.centre_distance, 0.0), g.lobes_female,
+                      -g.lobes_male / g.lobes_female, g.r2))
+
+    @cached_property
+    def cutter(self):
+        from .regions import SectionCutter
+
+        return SectionCutter(self)
+
+    @cached_property
+    def female_shift(self) -> float:
+        from .section import female_shift
+
+        return female_shift(self)
+
+    def section(self, points_per_period: int):
+        from .section import section_chamber
+
+        return section_chamber(self, points_per_period)
+
+    def chamber_polygons(self, phi: float, contacts: list | None = None):
+        from .section import chamber_polygons
+
+        return chamber_polygons(self, phi, contacts)
+
+    @cached_property
+    def working_area(self) -> float:
+        """The two bores' union: the chambers plus both rotors' material."""
+        c, r1, r2 = self.gearing.centre_distance, self.male_radius, self.female_radius
+        x, y = self.cusp
+        lens = (r1 * r1 * math.acos(x / r1) - x * y
+                + r2 * r2 * math.acos((c - x) / r2) - (c - x) * y)
+        return math.pi * (r1 * r1 + r2 * r2) - lens
+
+    def casing_bores(self, bore_radius: float | None = None):
+        if bore_radius is not None:
+            raise CaseError("a twin-screw casing has one bore per rotor, each of its "
+                            "rotor's outer radius; bore_radius does not apply")
+        return (((0.0, 0.0), self.male_radius),
+                ((self.gearing.centre_distance, 0.0), self.female_radius))
+
+    def gap_walls(self, angle: float, gap: float, **options):
+        raise CaseError("CFD gap sections are not built for the twin-screw family yet")
+
+    def wall_speeds(self, angle: float, omega_reference: float):
+        raise CaseError("CFD gap sections are not built for the twin-screw family yet")
+
+    def figures(self) -> dict:
+        from .figures import pair_figures
+
+        return pair_figures(self)
+
+    def contact_table(self, step_deg: float = 1.0, span_deg: float | None = None):
+        from .section import contact_table
+
+        return contact_table(self, step_deg, span_deg)
+
+    def digest(self) -> str:
+        text = repr((self.label, self.gearing, self.male_radius, self.female_radius,
+                     self.male.area, self.female.area))
+        return hashlib.sha256(text.encode()).hexdigest()[:8]
+
+    def leakage_paths(self, far_lines, track_lines=None) -> tuple:
+        from .leakage import twin_screw_paths
+
+        return twin_screw_paths(track_lines or {})

@@ -1,0 +1,225 @@
+"""One twin-screw working chamber in a transverse section, followed over its life.
+
+A working chamber is one male groove and one female groove: the pair that meet at the
+bottom cusp, where the lobes go into mesh and the chamber dies (:mod:`.regions` says
+which life of a groove a part of the section belongs to).  The female groove is born
+first (a female groove lives N2 / N1 male turns, a male groove one), so the chamber's
+section holds the female part alone at first, then both, until the two are squeezed
+out together at the bottom.
+
+Chambers one lobe period apart are the same chamber at different ages, and a section
+at male angle psi holds every chamber of the machine at once; so one lobe period of
+sections, each part booked to its chamber's age, gives the whole life.  Chamber 0 is
+the one whose male groove is groove 0, born at psi = -beta_0 (its mid-line then facing
+the female axis); a part of age ``a`` at angle psi belongs to the chamber
+``(a - psi - beta_0) / period`` periods older (the female parts' ages shifted by the
+pairing at the bottom cusp).
+
+Sealing points per chamber (tracks): both tips of the male groove and of the female
+groove while they seal on their bores (beyond a leading tip the chamber one period
+older, beyond a trailing one the one a period younger, or a revolution off where that
+groove has begun its next life), and the interlobe contacts: in the newborn part the
+chamber beyond is older ("interlobe-lead"), in the dying part younger ("-trail").
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+
+import numpy as np
+
+from rotorflow.errors import CaseError
+
+from ..planar import TWO_PI
+from ..section import POINTS_PER_PERIOD, SectionChamber, Track
+from .regions import FEMALE, MALE
+
+#: A contact seen from the parts on both its sides is one point: within this (per C).
+SAME_POINT = 1e-6
+#: Sections over one period scanned for the male and female grooves that die together
+#: (any section where they share the bottom cusp will do).
+FEMALE_SHIFT_SCAN = 8
+#: A track point that moves more than this many times its median step between two
+#: nodes has jumped to another contact (a new identity, no rate across it).
+JUMP_FACTOR = 8.0
+
+
+def _beta0(pair) -> float:
+    period = TWO_PI / pair.gearing.lobes_male
+    return pair.tip_angle(MALE) + 0.5 * period
+
+
+def _female_shift(pair, parts_by_section, psis) -> float:
+    """The female parts' age shift: the male groove and the female groove that die
+    together at the bottom cusp belong to one chamber."""
+    period = TWO_PI / pair.gearing.lobes_male
+    b0 = _beta0(pair)
+    frac = None
+    for psi, parts in zip(psis, parts_by_section):
+        for p in parts:
+            if p.rotor == FEMALE:
+                x = (p.age - psi - b0) / period
+                frac = x - round(x)
+                break
+        if frac is not None:
+            break
+    for psi, parts in zip(psis, parts_by_section):
+        bottom = defaultdict(dict)
+        for p in parts:
+            if p.side == "bottom":
+                bottom[p.piece][p.rotor] = p
+        for both in bottom.values():
+            if MALE in both and FEMALE in both:
+                qm = (both[MALE].age - psi - b0) / period
+                qf = (both[FEMALE].age - psi - b0) / period - frac
+                return -(frac + round(qf - qm)) * period
+    raise CaseError("no section shows a male and a female groove meeting at the "
+                    "discharge-side cusp: the profiles do not form working chambers")
+
+
+def female_shift(pair) -> float:
+    """The female parts' age shift, from a coarse scan of one period."""
+    psis, scans = _scan(pair, FEMALE_SHIFT_SCAN)
+    return _female_shift(pair, scans, psis)
+
+
+def _scan(pair, points_per_period):
+    period = TWO_PI / pair.gearing.lobes_male
+    h = period / points_per_period
+    psis = -_beta0(pair) + h * np.arange(points_per_period)
+    cutter = pair.cutter
+    return psis, [cutter.cut(float(p)) for p in psis]
+
+
+def chamber_index(pair, part, psi, shift) -> int:
+    period = TWO_PI / pair.gearing.lobes_male
+    age = part.age + (shift if part.rotor == FEMALE else 0.0)
+    return int(round((age - psi - _beta0(pair)) / period))
+
+
+def section_chamber(pair, points_per_period: int = POINTS_PER_PERIOD) -> SectionChamber:
+    """Tabulate chamber 0 of ``pair`` from birth to death."""
+    psis, scans = _scan(pair, points_per_period)
+    shift = pair.female_shift
+    nodes = defaultdict(lambda: {"area": 0.0, "force": np.zeros((2, 2)),
+                                 "torque": np.zeros(2), "perimeter": np.zeros(2),
+                                 "seals": []})
+    for m, (psi, parts) in enumerate(zip(psis, scans)):
+        qs = [chamber_index(pair, p, psi, shift) for p in parts]
+        for p, q in zip(parts, qs):
+            node = nodes[m + q * points_per_period]
+            node["area"] += p.area
+            node["force"] += p.force
+            node["torque"] += p.torque
+            node["perimeter"] += p.perimeter
+        for q, name, kind, point, other in _seals(pair, parts, qs):
+            nodes[m + q * points_per_period]["seals"].append((name, kind, point, other - q))
+    return _assemble(pair, psis[0], points_per_period, nodes)
+
+
+def _seals(pair, parts, qs):
+    """(chamber, track name, kind, point, chamber beyond) of every sealing point."""
+    out = []
+    tips = defaultdict(list)
+    for p, q in zip(parts, qs):
+        for rotor, k, pt in p.tips:
+            tips[(rotor, k)].append((p, q, pt))
+    for (rotor, k), seen in tips.items():
+        if len(seen) != 2:
+            continue
+        for (p, q, pt), (_, q2, _) in (seen, seen[::-1]):
+            # Male grooves lie between tip k (clockwise end) and k + 1; the male turns
+            # counter-clockwise, so its groove leads with tip k + 1.  The female turns
+            # clockwise: its groove j leads with tip j.
+            n = pair.gearing.lobes_male if rotor == MALE else pair.gearing.lobes_female
+            leading = (k == (p.groove + 1) % n) if rotor == MALE else (k == p.groove)
+            name = f"tip-{'male' if rotor == MALE else 'female'}-{'lead' if leading else 'trail'}"
+            out.append((q, name, "tip", pt, q2))
+    tol = SAME_POINT * pair.gearing.centre_distance
+    contacts = [(p, q, c) for p, q in zip(parts, qs) for c in p.contacts]
+    for i, (p, q, c) in enumerate(contacts):
+        for j, (p2, q2, c2) in enumerate(contacts):
+            if j != i and q2 != q and np.linalg.norm(c - c2) < tol:
+                out.append((q, "interlobe-lead" if q2 > q else "interlobe-trail",
+                            "interlobe", c, q2))
+                break
+    return out
+
+
+def _assemble(pair, psi0, ppp, nodes) -> SectionChamber:
+    period = TWO_PI / pair.gearing.lobes_male
+    h = period / ppp
+    keys = sorted(k for k, v in nodes.items() if v["area"] > 0.0)
+    first, last = keys[0] - 1, keys[-1] + 1  # a zero node either side
+    idx = np.arange(first, last + 1)
+    n = len(idx)
+    area = np.array([nodes[k]["area"] if k in nodes else 0.0 for k in idx])
+    force = np.array([nodes[k]["force"] if k in nodes else np.zeros((2, 2)) for k in idx])
+    torque = np.array([nodes[k]["torque"] if k in nodes else np.zeros(2) for k in idx])
+    perim = np.array([nodes[k]["perimeter"] if k in nodes else np.zeros(2) for k in idx])
+    tracks = _tracks([nodes[k]["seals"] if k in nodes else [] for k in idx], n)
+    zero2 = np.zeros((n, 2))
+    zeros = np.zeros(n, dtype=int)
+    psi = psi0 + h * idx
+    return SectionChamber(
+        psi=psi, area=area, force=force, torque=torque, perimeter=perim,
+        trail=zero2, lead=zero2, phi_i=float(psi[0]), phi_f=float(psi[-1]),
+        speed_ratio=tuple(r.speed_ratio for r in pair.rotors),
+        lead_offset=zeros, trail_offset=zeros, lead_id=zeros, trail_id=zeros,
+        lead_kind=np.full(n, "interlobe"), trail_kind=np.full(n, "interlobe"),
+        tracks=tracks,
+    )
+
+
+def _tracks(seals_per_node, n) -> tuple[Track, ...]:
+    """One Track per sealing-point name (a second point of one name at one node, such
+    as a second interlobe contact, gets a name of its own: ``name#2``)."""
+    by_name = defaultdict(lambda: (np.zeros((n, 2)), np.zeros(n, bool), np.zeros(n, int)))
+    kinds = {}
+    for i, seals in enumerate(seals_per_node):
+        count = defaultdict(int)
+        for name, kind, point, offset in sorted(seals, key=lambda s: (s[0], s[2][1])):
+            count[name] += 1
+            key = name if count[name] == 1 else f"{name}#{count[name]}"
+            pts, present, off = by_name[key]
+            pts[i], present[i], off[i] = point, True, offset
+            kinds[key] = kind
+    out = []
+    for name in sorted(by_name):
+        pts, present, off = by_name[name]
+        out.append(Track(name, kinds[name], *_fill(pts, present), off, _ids(pts, present)))
+    return tuple(out)
+
+
+def _fill(pts, present):
+    """Absent points take the nearest present one (rates stay finite)."""
+    idx = np.nonzero(present)[0]
+    j = idx[np.clip(np.searchsorted(idx, np.arange(len(pts))), 0, len(idx) - 1)]
+    out = pts.copy()
+    out[~present] = pts[j[~present]]
+    return out, present
+
+
+def _ids(pts, present):
+    step = np.linalg.norm(np.diff(pts, axis=0), axis=-1)
+    both = present[1:] & present[:-1]
+    typical = np.median(step[both]) if both.any() else 0.0
+    jump = ~both | (step > JUMP_FACTOR * max(typical, 1e-300))
+    return np.concatenate([[0], np.cumsum(jump)])
+
+
+def chamber_polygons(pair, phi: float, contacts: list | None = None) -> list[np.ndarray]:
+    """Chamber 0's section at male angle ``phi`` (fixed frame, metres)."""
+    shift = pair.female_shift
+    out = []
+    for p in pair.cutter.cut(float(phi)):
+        if chamber_index(pair, p, float(phi), shift) == 0:
+            out.extend(p.polygons)
+            if contacts is not None:
+                contacts.extend(p.contacts)
+    return out
+
+
+def contact_table(pair, step_deg: float = 1.0, span_deg: float | None = None):
+    raise CaseError("the twin-screw contact table is not built yet")

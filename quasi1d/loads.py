@@ -106,16 +106,27 @@ def gas_loads(result: SimulationResult, table) -> GasLoads | None:
     """The rotors' gas loads over the converged period; None if ``table`` has none."""
     if not has_loads(table):
         return None
-    sol = result.solution
-    model, geo = sol.model, sol.model.geo
+    model = result.solution.model
     machine = fine_traces(result)
     theta = machine["theta_rad"]
+    ks, gauge = _gauge_pressures(model, theta, machine["p_Pa"], float(table.angle_rad[-1]))
+    rotors = fold(table, theta, model.geo.period, ks, gauge, model.dis.p - model.suc.p)
+    return GasLoads(theta, rotors, model.geo.omega_outer,
+                    float(result.figures["indicated_power_W"]))
+
+
+def fold(table, theta: np.ndarray, period: float, ks: np.ndarray, gauge: np.ndarray,
+         dp_end_face: float) -> tuple[RotorLoads, ...]:
+    """Loads on every rotor at the angles ``theta`` from the gauge pressures (angles,
+    ks) of the chambers ``ks`` periods older than the one of age theta; ``dp_end_face``:
+    discharge minus suction pressure, on the rotors' high-pressure end faces."""
     a = np.asarray(table.angle_rad, float)
-    ks, gauge = _gauge_pressures(model, theta, machine["p_Pa"], float(a[-1]))
-    ages = theta[:, None] + geo.period * ks[None, :]
+    ages = theta[:, None] + period * np.asarray(ks)[None, :]
     rotors = []
     for name, ratio in zip(table.rotor_names, table.speed_ratios, strict=True):
         def load(column):
+            # linear in the node values, and every chamber sits at the same fraction of
+            # a (period-aligned) cell: a uniform pressure cancels as on the nodes
             per_unit = np.interp(ages, a, np.asarray(table.columns[column], float),
                                  left=0.0, right=0.0)
             return (gauge * per_unit).sum(axis=1)
@@ -123,26 +134,25 @@ def gas_loads(result: SimulationResult, table) -> GasLoads | None:
         fluid_torque = load(f"torque_{name}_m3")
         rotors.append(RotorLoads(name, float(ratio), load(f"force_{name}_x_m2"),
                                  load(f"force_{name}_y_m2"), -fluid_torque,
-                                 _axial(table, name, fluid_torque, model)))
-    return GasLoads(theta, tuple(rotors), geo.omega_outer, float(result.figures[
-        "indicated_power_W"]))
+                                 _axial(table, name, fluid_torque, dp_end_face)))
+    return tuple(rotors)
 
 
-def _k0(geo) -> int:
-    """First slot offset whose chamber may exist: ages down to 0 (before the model's
-    birth the table's chamber already exists, at suction pressure)."""
-    return -int(math.ceil(geo.birth / geo.period))
+def slots(birth: float, period: float, n_model: int, theta0: float, age_end: float):
+    """Offsets k of every chamber that exists at some angle of a period starting at
+    theta0: from ages down to 0 (before the model's birth the table's chamber already
+    exists) to the table's end ``age_end`` (which may lie past the model's last slot)."""
+    k0 = -int(math.ceil(birth / period))
+    k1 = max(n_model, int(math.ceil((age_end - theta0) / period)) + 1)
+    return np.arange(k0, k1)
 
 
 def _gauge_pressures(model, theta: np.ndarray, p: np.ndarray, age_end: float):
-    """Slot offsets ks (from _k0 to the table's end ``age_end``) and p - p_suction of
-    every such chamber at every angle (angles, ks): the model's slots where alive,
-    suction before birth, discharge after death (see the module docstring)."""
+    """Slot offsets ks (see :func:`slots`) and p - p_suction of every such chamber at
+    every angle (angles, ks): the model's slots where alive, suction before birth,
+    discharge after death (see the module docstring)."""
     geo = model.geo
-    k0 = _k0(geo)
-    # the table may run on past the model's last slot (the death angle)
-    k1 = max(p.shape[1], int(math.ceil((age_end - theta[0]) / geo.period)) + 1)
-    ks = np.arange(k0, k1)
+    ks = slots(geo.birth, geo.period, p.shape[1], float(theta[0]), age_end)
     ages = theta[:, None] + geo.period * ks[None, :]
     g = np.where(ages > geo.death, model.dis.p - model.suc.p, 0.0)
     inside = (ks >= 0) & (ks < p.shape[1])
@@ -153,7 +163,7 @@ def _gauge_pressures(model, theta: np.ndarray, p: np.ndarray, age_end: float):
     return ks, g
 
 
-def _axial(table, name: str, fluid_torque: np.ndarray, model) -> np.ndarray | None:
+def _axial(table, name: str, fluid_torque: np.ndarray, dp: float) -> np.ndarray | None:
     """Axial gas force on the rotor: on the flanks (axial_per_torque times the fluid's
     torque, :func:`rotorflow.geometry.summary._rotor_loads`) plus the end faces:
     discharge pressure on the high-pressure end face, suction on the low-pressure one,
@@ -162,7 +172,7 @@ def _axial(table, name: str, fluid_torque: np.ndarray, model) -> np.ndarray | No
     area = table.rotor_scalars.get(f"end_area_{name}_m2")
     if k is None or area is None:
         return None
-    return k * fluid_torque - (model.dis.p - model.suc.p) * area
+    return k * fluid_torque - dp * area
 
 
 def fine_traces(result: SimulationResult) -> dict:

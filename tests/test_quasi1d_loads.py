@@ -179,5 +179,6 @@ def test_table_keeps_the_loads_through_its_files(default, tmp_path):
     assert back.rotor_names == tab.rotor_names and back.speed_ratios == tab.speed_ratios
     assert back.rotor_scalars == tab.rotor_scalars
     # the CSV keeps 13 significant digits
-    np.testing.assert_allclose(back.columns["torque_outer_m3"], tab.columns["torque_outer_m3"],
-                               rtol=1e-12, atol=1e-12 * np.abs(tab.columns["torque_outer_m3"]).max())
+    col = tab.columns["torque_outer_m3"]
+    np.testing.assert_allclose(back.columns["torque_outer_m3"], col, rtol=1e-12,
+                               atol=1e-12 * np.abs(col).max())

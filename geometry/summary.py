@@ -80,6 +80,7 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     lines = m.seal_lines
     far = {d: v for d, v in lines.items() if abs(d) >= 2}
     zero = np.zeros_like(cur.phi)
+    load_columns, rotor_scalars = _rotor_loads(m)
     return ChamberTable(
         angle_rad=cur.phi - cur.phi[0],
         volume_m3=cur.volume,
@@ -97,4 +98,43 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
         seal_far=far,
         machine=pair.family,
         leakage_paths=pair.leakage_paths(far),
+        columns=load_columns,
+        rotor_names=tuple(r.name for r in pair.rotors),
+        speed_ratios=tuple(float(r.speed_ratio) for r in pair.rotors),
+        rotor_scalars=rotor_scalars,
     )
+
+
+def _rotor_loads(m: SweptMachine) -> tuple[dict, dict]:
+    """The gas-load columns and per-rotor scalars of the chamber table (see :mod:`.table`).
+
+    Axial force on the flanks: rotor r's section at height z is its own section at
+    z = 0 turned by -s_r twist(z) (:mod:`.sweep`), so with a constant lead the screw
+    motion (turn by w, advance by -w / (s_r twist')) maps the rotor onto itself.  The
+    fluid does no work on a surface that slides along itself: T w + F_z V = 0, hence
+    F_z = s_r twist' T (T: the fluid's torque).  A conical sweep has no such motion
+    (its flanks taper and its lead varies): no scalar, the quasi-1D model says so.
+
+    End face: the rotor's section at the high-pressure end (the rotor's material inside
+    its profile, or for a rotor whose material lies outside its profile, the ring out to
+    the casing bore about its axis), scaled by the sweep's end scale.
+    """
+    cur, pair, sw = m.curves, m.pair, m.sweep
+    columns, scalars = {}, {}
+    end_scale2 = float(sw.scale(sw.length)) ** 2
+    for r, rotor in enumerate(pair.rotors):
+        name = rotor.name
+        columns[f"force_{name}_x_m2"] = cur.force[:, r, 0]
+        columns[f"force_{name}_y_m2"] = cur.force[:, r, 1]
+        columns[f"torque_{name}_m3"] = cur.torque[:, r]
+        if sw.kind in ("straight", "helical"):
+            scalars[f"axial_per_torque_{name}_per_m"] = float(
+                rotor.speed_ratio * sw.wrap / sw.length)
+        area = abs(float(rotor.profile.area))
+        if not rotor.material_inside:
+            bores = [rad for centre, rad in pair.casing_bores()
+                     if np.allclose(centre, rotor.axis)]
+            area = math.pi * bores[0] ** 2 - area if bores else None
+        if area is not None:
+            scalars[f"end_area_{name}_m2"] = area * end_scale2
+    return columns, scalars

@@ -36,6 +36,22 @@ The JSON side-car (same stem, ``.json``) carries the scalars: ``lobes_outer``,
 ``diameter_m`` and ``machine``, and the path declarations ``leakage_paths`` (a list of
 objects with the fields of :class:`LeakagePath`).  A side-car written before the
 declarations existed gets the internal-gear set (:func:`internal_gear_paths`).
+
+Gas loads.  For each rotor NAME of the pair (``rotor_names``, reference rotor first;
+``speed_ratios``: each rotor's signed angular speed over the reference rotor's) the
+table carries the columns
+
+    force_NAME_x_m2, force_NAME_y_m2   force of the fluid on rotor NAME per unit chamber
+                                       pressure, fixed frame (N/Pa = m2)
+    torque_NAME_m3                     torque of the fluid on rotor NAME about its own
+                                       axis per unit pressure, counter-clockwise positive
+
+and the per-rotor scalars ``rotor_scalars`` (absent where undefined):
+``end_area_NAME_m2``, the rotor's transverse section at the high-pressure end (the end
+face the discharge pressure acts on), and ``axial_per_torque_NAME_per_m``, the axial
+force of the fluid on the rotor's flanks per unit of the fluid's torque on it (1/m,
++z from the low- to the high-pressure end); defined for constant lead (straight: 0).
+A table without them (older side-cars, one-chamber test tables) has no gas loads.
 """
 
 from __future__ import annotations
@@ -209,7 +225,14 @@ class ChamberTable:
     leakage_paths: tuple[LeakagePath, ...] | None = None
     """The declared leakage paths; None: the internal-gear set for these columns."""
     columns: dict[str, np.ndarray] = field(default_factory=dict)
-    """The family's own path columns, beyond the fixed and the far ones, by name."""
+    """The family's own path columns, beyond the fixed and the far ones, by name, and
+    the gas-load columns (see the module docstring)."""
+    rotor_names: tuple[str, ...] = ()
+    """The pair's rotors, reference first; () when the table carries no gas loads."""
+    speed_ratios: tuple[float, ...] = ()
+    """Signed angular speed of each rotor over the reference rotor's."""
+    rotor_scalars: dict[str, float] = field(default_factory=dict)
+    """end_area_NAME_m2, axial_per_torque_NAME_per_m where defined."""
 
     @property
     def paths(self) -> tuple[LeakagePath, ...]:
@@ -266,10 +289,14 @@ class ChamberTable:
             "swept_volume_m3": self.swept_volume_m3,
             "length_m": self.length_m,
             "diameter_m": self.diameter_m,
+            "rotor_names": list(self.rotor_names),
+            "speed_ratios": list(self.speed_ratios),
+            **self.rotor_scalars,
         }
 
 
 _FAR = re.compile(r"seal_(next|prev)(\d+)_m")
+_ROTOR_SCALAR = re.compile(r"(end_area_\w+_m2|axial_per_torque_\w+_per_m)")
 
 
 def write(table: ChamberTable, csv_path: Path) -> None:
@@ -315,6 +342,7 @@ def read(csv_path: Path) -> ChamberTable:
             paths = tuple(LeakagePath.from_dict(p) for p in meta["leakage_paths"])
         except (TypeError, ValueError, AttributeError) as exc:
             raise ValueError(f"chamber table side-car {side}: {exc}") from None
+    per_rotor = {k: float(v) for k, v in meta.items() if _ROTOR_SCALAR.fullmatch(k)}
     return ChamberTable(
         **cols,
         lobes_outer=int(meta["lobes_outer"]),
@@ -325,6 +353,9 @@ def read(csv_path: Path) -> ChamberTable:
         seal_far=far,
         leakage_paths=paths,
         columns=extra,
+        rotor_names=tuple(str(n) for n in meta.get("rotor_names", ())),
+        speed_ratios=tuple(float(x) for x in meta.get("speed_ratios", ())),
+        rotor_scalars=per_rotor,
     )
 
 

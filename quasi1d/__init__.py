@@ -4,7 +4,8 @@ and ports, integrated to the machine's periodic state.
     from rotorflow.quasi1d import simulate, Operating, Leakage, Ports, Numerics
     result = simulate(table, Operating.from_section(case["operating"], "case.toml"),
                       Leakage.from_section(case.get("leakage", {}), "case.toml"),
-                      Ports.from_section(case.get("ports", {}), "case.toml"))
+                      Ports.from_section(case.get("ports", {}), "case.toml"),
+                      mechanical=Mechanical.from_section(case.get("mechanical", {}), "case.toml"))
     result.summary()               # figures as a JSON-ready dict
     result.write_traces(folder)    # chamber_cycle.csv, chambers.csv
     result.plot(folder)            # p-angle and p-V PNGs
@@ -14,10 +15,11 @@ state, without cycle convergence (a single chamber's transient, see :mod:`.trans
 """
 
 from .integrate import IntegrationError
+from .mechanical import Mechanical
 from .result import SimulationResult, plot_cycle
 from .settings import Leakage, Numerics, Operating, Ports
 from .simulate import simulate
 from .transient import TransientResult, simulate_transient
 
-__all__ = ["IntegrationError", "Leakage", "Numerics", "Operating", "Ports", "SimulationResult",
-           "TransientResult", "plot_cycle", "simulate", "simulate_transient"]
+__all__ = ["IntegrationError", "Leakage", "Mechanical", "Numerics", "Operating", "Ports",
+           "SimulationResult", "TransientResult", "plot_cycle", "simulate", "simulate_transient"]

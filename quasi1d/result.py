@@ -19,13 +19,16 @@ class SimulationResult:
     ``figures`` holds the performance figures (see :mod:`.performance`); ``machine`` holds
     the traces over one lobe period: ``theta_rad`` (outer-rotor angle) and per slot arrays
     ``volume_m3``, ``p_Pa``, ``T_K``, ``m_kg`` of shape (angles, slots); ``chamber`` holds
-    one chamber's life from birth to death (the slots' traces joined by age).
+    one chamber's life from birth to death (the slots' traces joined by age);
+    ``loads`` the rotors' gas loads over the period (:class:`.loads.GasLoads`, None when
+    the chamber table has no load columns).
     """
 
     figures: dict
     machine: dict = field(repr=False)
     chamber: dict = field(repr=False)
     solution: CycleSolution = field(repr=False)
+    loads: object = field(default=None, repr=False)
 
     @property
     def converged(self) -> bool:

@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from rotorflow.errors import CaseError
 
 from . import cycle
 from .chamber import prepare
 from .fluids import make_fluid
+from .mechanical import Mechanical
 from .model import ChamberModel, build
 from .result import SimulationResult, make_result
 from .settings import Leakage, Numerics, Operating, Ports
+from .shaft import shaft_figures
 
 
 def build_model(table, operating: Operating, leakage: Leakage | None = None,
@@ -30,7 +34,8 @@ def build_model(table, operating: Operating, leakage: Leakage | None = None,
 
 
 def simulate(table, operating: Operating, leakage: Leakage | None = None,
-             ports: Ports | None = None, numerics: Numerics | None = None) -> SimulationResult:
+             ports: Ports | None = None, numerics: Numerics | None = None,
+             mechanical: Mechanical | None = None) -> SimulationResult:
     """Cycle-converged simulation of the machine whose chamber is ``table``.
 
     ``table`` is a :class:`rotorflow.geometry.table.ChamberTable`; the speed in
@@ -40,6 +45,10 @@ def simulate(table, operating: Operating, leakage: Leakage | None = None,
     figures; bad input raises CaseError, an integration that cannot proceed
     IntegrationError.  Without ``leakage`` the chambers are sealed; without ``ports`` the
     ports are ideal; without ``numerics`` the defaults of :class:`Numerics` apply.
+    The gas loads, mechanical loss and shaft power (:mod:`.shaft`) use ``mechanical``
+    (default: the published coefficients of :class:`Mechanical`).
     """
     model = build_model(table, operating, leakage, ports, numerics)
-    return make_result(cycle.solve(model, numerics or Numerics()))
+    result = make_result(cycle.solve(model, numerics or Numerics()))
+    extra, loads = shaft_figures(result, table, mechanical or Mechanical())
+    return replace(result, figures={**result.figures, **extra}, loads=loads)

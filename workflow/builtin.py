@@ -75,7 +75,7 @@ def run_table(ctx: StageContext) -> dict:
 
 def run_quasi1d(ctx: StageContext) -> dict:
     from rotorflow.geometry import table
-    from rotorflow.quasi1d import Leakage, Numerics, Operating, Ports, simulate
+    from rotorflow.quasi1d import Leakage, Mechanical, Numerics, Operating, Ports, simulate
 
     raw, where = ctx.raw, str(ctx.case_path)
     tab = table.read(ctx.input("table") / "chamber_table.csv")
@@ -83,7 +83,8 @@ def run_quasi1d(ctx: StageContext) -> dict:
                       Operating.from_section(raw["operating"], where),
                       Leakage.from_section(raw.get("leakage", {}), where),
                       Ports.from_section(raw.get("ports", {}), where),
-                      Numerics.from_section(raw.get("numerics", {}), where))
+                      Numerics.from_section(raw.get("numerics", {}), where),
+                      Mechanical.from_section(raw.get("mechanical", {}), where))
     summary = result.summary()
     write_json(ctx.out / "summary.json", summary)
     result.write_traces(ctx.out)

@@ -22,8 +22,8 @@ SWEEP_KEYS = {"kind", "wrap_outer_deg", "wrap_bar", "diameter_end_mm", "lead_rat
 #: [operating] keys the geometry reads; the quasi-1D stage owns the others.
 OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven"}
 SECTIONS = {
-    "machine", "sweep", "operating", "leakage", "ports", "numerics", "export", "outputs", "cfd",
-    "cfd_chamber",
+    "machine", "sweep", "operating", "leakage", "ports", "numerics", "mechanical", "export",
+    "outputs", "cfd", "cfd_chamber",
 }
 
 
@@ -195,6 +195,10 @@ def validate_stage_sections(data: dict, path: Path, pair: RotorPair | None = Non
             continue
         allowed = OPERATING_GEOMETRY_KEYS if name == "operating" else set()
         _check_keys(section, allowed, name, path)
+    if "mechanical" in data:  # owned by the quasi-1D stage (shaft power)
+        from rotorflow.quasi1d.mechanical import Mechanical
+
+        Mechanical.from_section(data["mechanical"], str(path))
     if "export" in data:  # owned by the solids stage
         from rotorflow.geometry.export.settings import Export
 

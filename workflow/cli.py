@@ -71,7 +71,7 @@ def cmd_contacts(args) -> int:
 
 def cmd_simulate(args) -> int:
     from rotorflow.geometry.summary import chamber_table
-    from rotorflow.quasi1d import Leakage, Numerics, Operating, Ports, simulate
+    from rotorflow.quasi1d import Leakage, Mechanical, Numerics, Operating, Ports, simulate
     from rotorflow.workflow.builtin import finite
     from rotorflow.workflow.case import load_case
 
@@ -84,7 +84,8 @@ def cmd_simulate(args) -> int:
     leakage = Leakage.from_section(raw.get("leakage", {}), where)
     ports = Ports.from_section(raw.get("ports", {}), where)
     numerics = Numerics.from_section(raw.get("numerics", {}), where)
-    result = simulate(chamber_table(case), operating, leakage, ports, numerics)
+    mechanical = Mechanical.from_section(raw.get("mechanical", {}), where)
+    result = simulate(chamber_table(case), operating, leakage, ports, numerics, mechanical)
     if args.traces:
         out = Path(args.traces)
         out.parent.mkdir(parents=True, exist_ok=True)

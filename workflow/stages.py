@@ -237,7 +237,7 @@ register(Stage(
     name="quasi1d",
     run=f"{_IMPL}:run_quasi1d",
     description="quasi-1D chamber model: summary.json, traces (CSV), p-angle and p-V plots",
-    reads=("operating", "leakage", "ports", "numerics"),
+    reads=("operating", "leakage", "ports", "numerics", "mechanical"),
     needs=("table",),
     code=("rotorflow.quasi1d", "rotorflow.geometry.table"),
     report=f"{_REPORT}:quasi1d_section",

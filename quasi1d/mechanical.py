@@ -1,0 +1,119 @@
+"""Mechanical losses at the shafts: rolling-bearing friction under the gas loads and the
+shaft seal, from published coefficients, not fitted to any measured compressor.
+
+Bearings (SKF, Rolling bearings catalogue, chapter "Friction", section "Estimating the
+frictional moment", Table 1 "Constant coefficient of friction mu for open bearings"):
+
+    M = 0.5 * mu * P * d            (M friction moment, P bearing load, d bore diameter)
+
+valid, says SKF, for a bearing load P ~ 0.1 C, good lubrication and normal operation.
+Per rotor, as screw compressors are usually built:
+* two radial bearings, cylindrical roller bearings with a cage, mu = 0.0011 (Table 1,
+  F_a ~ 0), each carrying half the rotor's radial gas force (the gas load taken as
+  centred between them);
+* one thrust bearing, a single-row angular contact ball bearing, mu = 0.0020 (Table 1),
+  carrying the whole axial gas force (flanks plus end faces, :mod:`.loads`).
+M is linear in P, so the mean moment over a period is that of the mean |load|; its power
+is M |omega_r|: Coulomb friction, linear in speed at given loads.  A rotor whose axial
+load the table leaves undefined (conical rotors) gets no thrust-bearing term, and the
+figures list it under ``not_modelled``.
+
+The bore d is a design choice, not a coefficient: ``bearing_bore_mm`` in the case.  Its
+default, BORE_FRACTION_DEFAULT of the machine diameter, is a placeholder sizing with no
+source; the figures report the bore used.
+
+Shaft seal: one seal where the driven shaft leaves the casing, a constant friction
+torque ``seal_torque_Nm``.  Default 0 (no seal modelled): SKF's radial shaft seal pages
+give lip-seal friction only as a diagram of power loss against shaft diameter and speed,
+which is not transcribed here; take the torque from the seal maker's data.
+
+Left out: viscous shear of injected oil in the clearances (Couette, mu U^2 A / h).  The
+chamber table gives the lengths of the sealing lines but neither the wetted land areas
+of the tips and end faces nor the sliding speed along each line, so the term would rest
+on invented areas; it is listed under ``not_modelled`` when oil is injected.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .settings import _check_keys, _number
+
+#: SKF Rolling bearings catalogue, Friction, Table 1: cylindrical roller bearings with a
+#: cage (F_a ~ 0).
+MU_CYLINDRICAL_ROLLER = 0.0011
+#: Same table: angular contact ball bearings, single row.
+MU_ANGULAR_CONTACT_SINGLE_ROW = 0.0020
+#: Placeholder bearing bore over the machine diameter, used without ``bearing_bore_mm``:
+#: no source; an order of magnitude for the journal of a rotor of that diameter.
+BORE_FRACTION_DEFAULT = 0.3
+#: Radial bearings per rotor, sharing its radial gas load equally.
+RADIAL_BEARINGS = 2
+
+
+@dataclass(frozen=True)
+class Mechanical:
+    """The [mechanical] section: bearing and seal friction (SI inside)."""
+
+    bearing_mu_radial: float = MU_CYLINDRICAL_ROLLER
+    bearing_mu_axial: float = MU_ANGULAR_CONTACT_SINGLE_ROW
+    bearing_bore_m: float | None = None  # None: BORE_FRACTION_DEFAULT * machine diameter
+    seal_torque_Nm: float = 0.0
+
+    KEYS = ("bearing_mu_radial", "bearing_mu_axial", "bearing_bore_mm", "seal_torque_Nm")
+
+    @classmethod
+    def from_section(cls, d: dict, where: str = "the case") -> Mechanical:
+        s = "mechanical"
+        _check_keys(d, cls.KEYS, s, where)
+        bore = d.get("bearing_bore_mm")
+        return cls(
+            bearing_mu_radial=_number(d, "bearing_mu_radial", s, where, MU_CYLINDRICAL_ROLLER,
+                                      nonnegative=True),
+            bearing_mu_axial=_number(d, "bearing_mu_axial", s, where,
+                                     MU_ANGULAR_CONTACT_SINGLE_ROW, nonnegative=True),
+            bearing_bore_m=None if bore is None else 1e-3 * _number(
+                d, "bearing_bore_mm", s, where, positive=True),
+            seal_torque_Nm=_number(d, "seal_torque_Nm", s, where, 0.0, nonnegative=True),
+        )
+
+    def bore(self, diameter_m: float) -> float:
+        return BORE_FRACTION_DEFAULT * diameter_m if self.bearing_bore_m is None \
+            else self.bearing_bore_m
+
+
+@dataclass(frozen=True)
+class MechanicalLoss:
+    bearings_W: dict  # per rotor: radial plus thrust bearings
+    seal_W: float
+    bore_m: float
+    not_modelled: tuple[str, ...]
+
+    @property
+    def total_W(self) -> float:
+        return float(sum(self.bearings_W.values()) + self.seal_W)
+
+
+def mechanical_loss(loads, mech: Mechanical, diameter_m: float, omega_driven: float,
+                    oil: bool = False) -> MechanicalLoss:
+    """Bearing and seal losses (W) under ``loads`` (:class:`.loads.GasLoads`) with the
+    driven shaft at ``omega_driven`` (rad/s)."""
+    d = mech.bore(diameter_m)
+    bearings, missing = {}, []
+    for r in loads.rotors:
+        omega = abs(r.speed_ratio * loads.omega_ref)
+        per_bearing = loads.mean(r.radial) / RADIAL_BEARINGS
+        moment = RADIAL_BEARINGS * 0.5 * mech.bearing_mu_radial * per_bearing * d
+        if r.axial is None:
+            missing.append(f"thrust bearing of {r.name}: axial gas load undefined (variable "
+                           "lead or tapered rotor)")
+        else:
+            moment += 0.5 * mech.bearing_mu_axial * loads.mean(np.abs(r.axial)) * d
+        bearings[r.name] = float(moment * omega)
+    if oil:
+        missing.append("viscous shear of the injected oil in the clearances (the chamber "
+                       "table gives no wetted land areas or sliding speeds)")
+    return MechanicalLoss(bearings, float(mech.seal_torque_Nm * abs(omega_driven)), d,
+                          tuple(missing))

@@ -20,7 +20,7 @@ quasi-1D model and the CFD cases read only that object.  What a pair offers:
   at a contact, for the CFD gap cases.
 * ``figures()``, ``contact_table(step_deg)``, ``digest()``: the family's own figures, its
   contact points against angle, a short identity for run folders.
-* ``leakage_paths(far_lines)``: the named leakage paths its chamber table declares
+* ``leakage_paths(far_lines, track_lines)``: the named leakage paths its chamber table declares
   (kind, neighbour or plenum, column, own clearance), which the quasi-1D model builds its
   flow network from.
 
@@ -109,9 +109,11 @@ class RotorPair(ABC):
     def digest(self) -> str: ...
 
     @abstractmethod
-    def leakage_paths(self, far_lines: dict[int, np.ndarray]) -> tuple:
+    def leakage_paths(self, far_lines: dict[int, np.ndarray],
+                      track_lines: dict | None = None) -> tuple:
         """The chamber table's leakage paths (:class:`~.table.LeakagePath`), given the
-        sealing lines to chambers two or more periods away that the sweep found."""
+        sealing lines to chambers two or more periods away that the sweep found, and
+        the lines of the section's further tracks, keyed (track name, offset)."""
 
     def rotor(self, name: str) -> Rotor:
         for r in self.rotors:

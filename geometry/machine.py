@@ -124,7 +124,14 @@ class SweptMachine:
     pair: RotorPair
     sweep: Sweep
     points_per_period: int = POINTS_PER_PERIOD
-    section_refinement: int = SECTION_REFINEMENT
+    #: None: the pair's own ``section_refinement`` if it has one (a family whose loads
+    #: have no kinks needs none), else SECTION_REFINEMENT.
+    section_refinement: int | None = None
+
+    def __post_init__(self):
+        if self.section_refinement is None:
+            own = getattr(self.pair, "section_refinement", None)
+            object.__setattr__(self, "section_refinement", own or SECTION_REFINEMENT)
 
     @cached_property
     def section(self) -> SectionChamber:

@@ -9,7 +9,7 @@ import numpy as np
 from .forces import power_split
 from .machine import SweptMachine
 from .section import POINTS_PER_PERIOD
-from .table import ChamberTable
+from .table import ChamberTable, track_column
 
 
 def build_machine(case, points_per_period: int | None = None) -> SweptMachine:
@@ -81,6 +81,8 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     far = {d: v for d, v in lines.items() if abs(d) >= 2}
     zero = np.zeros_like(cur.phi)
     load_columns, rotor_scalars = _rotor_loads(m)
+    tracks = m.track_lines
+    load_columns.update({track_column(name, d): v for (name, d), v in tracks.items()})
     return ChamberTable(
         angle_rad=cur.phi - cur.phi[0],
         volume_m3=cur.volume,
@@ -97,7 +99,7 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
         diameter_m=pair.diameter,
         seal_far=far,
         machine=pair.family,
-        leakage_paths=pair.leakage_paths(far),
+        leakage_paths=pair.leakage_paths(far, tracks),
         columns=load_columns,
         rotor_names=tuple(r.name for r in pair.rotors),
         speed_ratios=tuple(float(r.speed_ratio) for r in pair.rotors),

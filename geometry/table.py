@@ -171,6 +171,12 @@ def far_column(offset: int) -> str:
     return f"seal_{'next' if offset > 0 else 'prev'}{abs(offset)}_m"
 
 
+def track_column(track: str, offset: int) -> str:
+    """Column name of a family's further sealing line (a section track) to the chamber
+    ``offset`` periods away."""
+    return f"seal_{track.replace('#', '_')}{'+' if offset > 0 else '-'}{abs(offset)}_m"
+
+
 def internal_gear_paths(far_offsets: Iterable[int] = ()) -> tuple[LeakagePath, ...]:
     """The leakage paths of an internal-gear (pin-generated) machine's table: the
     sealing lines to the chambers one period older and younger (one line seen from both

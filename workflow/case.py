@@ -19,6 +19,10 @@ from rotorflow.geometry.sweep import Sweep
 #: [machine] keys of every family; each family adds its own (geometry.family.Family.keys).
 MACHINE_KEYS = {"type", "length_mm"}
 SWEEP_KEYS = {"kind", "wrap_outer_deg", "wrap_bar", "diameter_end_mm", "lead_ratio"}
+#: A family's rotors may give the wrap by name (wrap_male_deg, wrap_female_deg, ...): any
+#: rotor's wrap fixes the others' through the lobe ratio (a rotor's twist is its speed
+#: ratio times the reference rotor's).
+WRAP_KEY = "wrap_{}_deg"
 #: [operating] keys the geometry reads; the quasi-1D stage owns the others.
 OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven"}
 SECTIONS = {
@@ -73,8 +77,8 @@ def load_case(path: Path) -> Case:
         if name not in SECTIONS:
             raise CaseError(f"unknown section [{name}] in {path}")
     pair, length = _machine(data, path)
-    kind, wrap, wrap_bar, scale_end, lead_ratio = _sweep_law(data, path, pair.diameter)
-    volume_ratio, driven = _operating(data, path)
+    kind, wrap, wrap_bar, scale_end, lead_ratio = _sweep_law(data, path, pair)
+    volume_ratio, driven = _operating(data, path, pair)
     validate_stage_sections(data, path, pair)
     return Case(
         name=path.stem,
@@ -113,27 +117,40 @@ def _machine(data: dict, path: Path) -> tuple[RotorPair, float]:
     return pair, length
 
 
-def _sweep_law(data: dict, path: Path, diameter: float):
-    """[sweep]: kind, outer wrap [rad] or wrap_bar (the other None), end scale and lead
-    ratio (both 1 but for a conical sweep)."""
+def _wrap_keys(pair: RotorPair) -> dict[str, float]:
+    """The wrap keys a case may use, each with the factor that turns that rotor's wrap
+    into the reference rotor's."""
+    keys = {"wrap_outer_deg": 1.0}
+    keys.update({WRAP_KEY.format(r.name): 1.0 / abs(r.speed_ratio) for r in pair.rotors})
+    return keys
+
+
+def _sweep_law(data: dict, path: Path, pair: RotorPair):
+    """[sweep]: kind, reference-rotor wrap [rad] or wrap_bar (the other None), end scale
+    and lead ratio (both 1 but for a conical sweep)."""
+    diameter = pair.diameter
     s = data.get("sweep", {"kind": "straight"})
-    _check_keys(s, SWEEP_KEYS, "sweep", path)
+    wraps = _wrap_keys(pair)
+    _check_keys(s, SWEEP_KEYS | set(wraps), "sweep", path)
     where = f"[sweep] of {path}"
     kind = s.get("kind", "straight")
     if kind not in ("straight", "helical", "conical"):
         raise CaseError(f"unknown sweep kind '{kind}' in {where} (straight, helical, conical)")
     wrap = wrap_bar = None
+    given = [k for k in (*wraps, "wrap_bar") if k in s]
     if kind == "straight":
-        if "wrap_outer_deg" in s or "wrap_bar" in s:
+        if given:
             raise CaseError(f"a straight sweep takes no wrap in {where}")
         wrap = 0.0
     else:
-        if ("wrap_outer_deg" in s) == ("wrap_bar" in s):
-            raise CaseError(f"give exactly one of 'wrap_outer_deg' or 'wrap_bar' in {where}")
-        if "wrap_outer_deg" in s:
-            wrap = math.radians(number(s, "wrap_outer_deg", where))
+        if len(given) != 1:
+            raise CaseError(f"give exactly one of {', '.join(repr(k) for k in wraps)} or "
+                            f"'wrap_bar' in {where}")
+        key = given[0]
+        if key != "wrap_bar":
+            wrap = math.radians(number(s, key, where)) * wraps[key]
             if wrap < 0.0:
-                raise CaseError(f"wrap_outer_deg must not be negative in {where}")
+                raise CaseError(f"{key} must not be negative in {where}")
         else:
             wrap_bar = number(s, "wrap_bar", where)
             if wrap_bar < 0.0:
@@ -153,7 +170,7 @@ def _sweep_law(data: dict, path: Path, diameter: float):
     return kind, wrap, wrap_bar, scale_end, lead_ratio
 
 
-def _operating(data: dict, path: Path) -> tuple[float, str]:
+def _operating(data: dict, path: Path, pair: RotorPair) -> tuple[float, str]:
     """The [operating] keys the geometry reads: volume ratio and driven rotor."""
     op = data.get("operating", {})
     if not isinstance(op, dict):
@@ -163,8 +180,10 @@ def _operating(data: dict, path: Path) -> tuple[float, str]:
     if not volume_ratio > 1.0:
         raise CaseError(f"volume_ratio must be greater than 1 in {where}, got {volume_ratio}")
     driven = op.get("driven", "auto")
-    if driven not in ("inner", "outer", "auto"):
-        raise CaseError(f"driven must be 'inner', 'outer' or 'auto' in {where}, got {driven!r}")
+    names = [r.name for r in pair.rotors]
+    if driven not in (*names, "auto"):
+        raise CaseError(f"driven must be one of {', '.join(repr(n) for n in names)} or "
+                        f"'auto' in {where}, got {driven!r}")
     return volume_ratio, driven
 
 

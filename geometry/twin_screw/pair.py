@@ -69,6 +69,10 @@ class TwinScrewPair(RotorPair):
     """Male and female profiles of one gearing, with their bores."""
 
     family = "twin-screw"
+    #: The section's loads are exact per section (snapped ends, no square-root kinks
+    #: like the internal gear's fillet contacts) and a section costs a Boolean cut, so
+    #: the loads use the chamber curves' own grid.
+    section_refinement = 1
 
     gearing: Gearing
     male: TwinProfile

@@ -40,6 +40,7 @@ from scipy.spatial import cKDTree
 
 from ..curves import sample
 from ..planar import TWO_PI, rotate
+from .boundaries import FEMALE, MALE, Boundaries
 
 #: Coordinates run in units of C / UNITS inside Clipper (it rounds to 1e-8).
 UNITS = 1000.0
@@ -49,26 +50,17 @@ SAMPLE_TOL = 1e-6
 #: How far the rotors are grown (per C) so that touching rotors overlap: twice the
 #: chord error, so that the inscribed polygons of two touching curves always cross.
 GROW = 2e-6
-#: Edge-classification tolerance per C: a boundary edge within this of a bore circle
-#: or of the cusp line lies on it (a few chord errors; nothing else comes that close
-#: except the rotor flanks next to a tip, whose ends are snapped anyway).
-ON_TOL = 5e-6
 #: A point this far (per C) inside the lens from a cusp tells which fluid piece holds
 #: the cusp (the cusp itself is a corner of the bores).
 CUSP_PROBE = 2e-3
 
-#: A fluid corner at a contact is the end of the overlap lens within this (per C): along
-#: a conformal band (a female tip rolling in a male root) the grown chords can cross
-#: a little away from where the lens's Boolean put its end.
-LENS_MATCH = 2e-3
+#: An isolated piece within this fraction of a whole groove's area is a whole groove
+#: (the first one must be at least this fraction of C^2).
+WHOLE_FRACTION = 1e-2
 #: Gauss nodes per polygon edge for its sliver and length (the edge is a short smooth
 #: arc: 6 nodes integrate it to rounding).
 SLIVER_NODES = 6
-#: A fluid vertex within this (per C) of a rotor polygon's vertex is that vertex (Clipper
-#: rounds to 1e-11 C; new intersection vertices are farther from every old one).
-SAME_VERTEX = 1e-9
 
-MALE, FEMALE, BORE_M, BORE_F, CUSP, NEW = 0, 1, 2, 3, 4, -1
 
 
 @dataclass(frozen=True)
@@ -100,25 +92,6 @@ def _slivers(profile, u):
 
 
 @dataclass
-class _Run:
-    """A wetted arc of one rotor in a part, from a to b; an end at a contact is
-    ``(None, polygon vertex)`` until the contacts are resolved."""
-
-    part: object
-    rotor: int
-    a: object
-    b: object
-    first: int  # rotor-polygon index of its first and last vertex (-1: none)
-    last: int
-    contact_start: bool = False
-    contact_end: bool = False
-
-
-def _key(x, scale):
-    return (round(x[0] / (SAME_VERTEX * scale)), round(x[1] / (SAME_VERTEX * scale)))
-
-
-@dataclass
 class Part:
     """One connected piece of fluid on one rotor's side of the cusp line."""
 
@@ -136,7 +109,7 @@ class Part:
     polygons: list = field(default_factory=list)  # rings, metres, fixed frame
 
 
-class SectionCutter:
+class SectionCutter(Boundaries):
     """Cuts sections of one pair (see the module docstring)."""
 
     def __init__(self, pair):
@@ -145,6 +118,7 @@ class SectionCutter:
         self.C = g.centre_distance
         self.k = UNITS / self.C  # metres -> Clipper units
         self.ratio = g.lobes_male / g.lobes_female  # female turns per male turn
+        self.grow = GROW * self.C
         self.R = (pair.male_radius, pair.female_radius)
         self.O = (np.zeros(2), np.array([self.C, 0.0]))
         c = self.C
@@ -172,7 +146,7 @@ class SectionCutter:
         from manifold3d import CrossSection
 
         rings = []
-        for o, r in zip(self.O, self.R):
+        for o, r in zip(self.O, self.R, strict=True):
             n = int(math.ceil(math.pi / math.acos(1.0 - SAMPLE_TOL * self.C / r)))
             a = np.linspace(0.0, TWO_PI, n, endpoint=False)
             rings.append(CrossSection([np.ascontiguousarray(
@@ -227,7 +201,7 @@ class SectionCutter:
             if x1 > self.xc:
                 halves.append((FEMALE, piece if x0 >= self.xc else piece ^ self._halves[1]))
             for rotor, half in halves:
-                if side == "" and self._isolated(rotor, x0, x1):
+                if side == "" and self._isolated(rotor, x0, x1) and self._whole_size(rotor, piece):
                     part = self._whole_groove(rotor, piece, psi)
                     part.piece = number
                     parts.append(part)
@@ -249,6 +223,15 @@ class SectionCutter:
             return x1 < self.C - self.R[1]
         return x0 > self.R[0]
 
+    def _whole_size(self, rotor, piece) -> bool:
+        """Whether an isolated piece is a groove's size (not a sliver left between a
+        tip and its bore's polygon, which goes the general way)."""
+        ref = self._whole.get(rotor)
+        size = piece.area() / self.k ** 2
+        if ref is None:
+            return size > WHOLE_FRACTION * self.C ** 2
+        return abs(size - ref.area) < WHOLE_FRACTION * ref.area
+
     def _whole_groove(self, rotor, piece, psi) -> Part:
         """A whole groove: its area and wetted length are every whole groove's (cut
         once), its loads those of the arc between its two tips (equal radii: no
@@ -257,10 +240,14 @@ class SectionCutter:
             self._whole[rotor] = self._part(rotor, piece, psi, "")
         ref = self._whole[rotor]
         rings = [q / self.k for q in piece.to_polygons()]
-        cen = _centroid(rings[0])
-        groove, age = self._groove_age(rotor, cen, psi, "")
         n = len(self._rotor_data[rotor].tips)
         tips = self.rotor_at(rotor, self._rotor_data[rotor].tips, psi)
+        # The groove is the one between the two tips its boundary passes (its centroid
+        # may lie beyond a tip's ray under a hooked flank).
+        near = cKDTree(rings[0]).query(tips)[0]
+        pair = sorted(np.argsort(near)[:2])
+        k = pair[1] if (pair[0], pair[1]) == (0, n - 1) and n > 2 else pair[0]
+        groove, age = self._groove_age(rotor, _centroid(rings[0]), psi, "", groove=int(k))
         # The fluid runs clockwise along the rotor, from the groove's counter-clockwise
         # tip (k + 1) to its clockwise one (k).
         a, b = tips[(groove + 1) % n], tips[groove]
@@ -287,218 +274,17 @@ class SectionCutter:
         part.groove, part.age = self._groove_age(rotor, cen, psi, side)
         return part
 
-    # ------------------------------------------------------------ boundaries
-    def _labels(self, ring, psi):
-        """Per vertex: (label, index in its rotor polygon or -1); per edge: label."""
-        tol = ON_TOL * self.C
-        n = len(ring)
-        vlab = np.full(n, NEW)
-        vidx = np.full(n, -1)
-        for r in (MALE, FEMALE):
-            d, k = self._rotor_data[r].tree.query(self.to_rotor(r, ring, psi))
-            hit = (d < SAME_VERTEX * self.C) & (vlab == NEW)
-            vlab[hit], vidx[hit] = r, k[hit]
-        for r, code in ((MALE, BORE_M), (FEMALE, BORE_F)):
-            on = np.abs(np.linalg.norm(ring - self.O[r], axis=-1) - self.R[r]) < tol
-            vlab[on & (vlab == NEW)] = code
-        nxt = np.roll(vlab, -1)
-        on_cusp = ((np.abs(ring[:, 0] - self.xc) < tol)
-                   & (np.abs(np.roll(ring[:, 0], -1) - self.xc) < tol))
-        rotor_end = np.where(vlab <= FEMALE, vlab, np.where(nxt <= FEMALE, nxt, NEW))
-        rotor_end[(vlab <= FEMALE) & (nxt <= FEMALE) & (vlab != nxt) & (vlab >= 0)] = NEW
-        elab = np.where(rotor_end >= 0, rotor_end, np.where(vlab == nxt, vlab, NEW))
-        elab[on_cusp & ~((vlab == nxt) & (vlab <= FEMALE) & (vlab >= 0))] = CUSP
-        bore = (elab == NEW) & np.isin(vlab, (BORE_M, BORE_F)) & np.isin(nxt, (BORE_M, BORE_F))
-        elab[bore] = np.where(np.linalg.norm(ring[bore] - self.O[0], axis=-1) < self.R[0] + tol,
-                              BORE_M, BORE_F)
-        rest = elab == NEW
-        if rest.any():
-            # An edge between two new corners (a cusp-line cut and a contact, say) lies
-            # on whichever rotor's chords pass through its middle.
-            mid = 0.5 * (ring[rest] + np.roll(ring, -1, axis=0)[rest])
-            d = [self._segment_distance(r, self.to_rotor(r, mid, psi)) for r in (MALE, FEMALE)]
-            elab[rest] = np.where(d[0] <= d[1], MALE, FEMALE)
-        return elab, vidx
-
-    def _segment_distance(self, r, x):
-        """Distance from points x (rotor r's frame) to rotor r's polygon's edges."""
-        rd = self._rotor_data[r]
-        p = rd.polygon
-        m = len(p)
-        _, k = rd.tree.query(x, k=2)
-        best = np.full(len(x), np.inf)
-        for j in (k[:, 0], k[:, 1]):
-            for a, b in ((p[j - 1], p[j]), (p[j], p[(j + 1) % m])):
-                e = b - a
-                t = np.clip(np.sum((x - a) * e, -1) / np.maximum(np.sum(e * e, -1), 1e-300),
-                            0.0, 1.0)
-                best = np.minimum(best, np.linalg.norm(a + t[:, None] * e - x, axis=-1))
-        return best
-
-    def _walk(self, ring, psi, part: Part) -> None:
-        """Add the loads, wetted lengths, tips and contacts of one boundary ring, and
-        the curves' slivers to the part's polygon area."""
-        lab, vidx = self._labels(ring, psi)
-        change = np.nonzero(lab != np.roll(lab, 1))[0]
-        if not len(change):
-            return
-        start = int(change[0])
-        lab, vidx = np.roll(lab, -start), np.roll(vidx, -start)
-        v = np.roll(ring, -start, axis=0)
-        edges = np.linalg.norm(np.roll(v, -1, axis=0) - v, axis=-1)
-        cuts = list(np.nonzero(lab != np.roll(lab, 1))[0]) + [len(lab)]
-        n = len(lab)
-        for i0, i1 in zip(cuts[:-1], cuts[1:]):
-            r = int(lab[i0])
-            if r in (BORE_M, BORE_F):
-                o, rad = self.O[r - BORE_M], self.R[r - BORE_M]
-                half = np.clip(edges[i0:i1] / (2.0 * rad), 0.0, 1.0)
-                th = 2.0 * np.arcsin(half)
-                part.area += float(np.sum(0.5 * rad * rad * (th - np.sin(th))))
-                del o
-                continue
-            if r not in (MALE, FEMALE):
-                continue
-            before, after = int(lab[i0 - 1]), int(lab[i1 % n])
-            idx = vidx[i0:i1 + 1] if i1 < n else np.append(vidx[i0:], vidx[0])
-            area, length = self._run_true(r, idx, edges[i0:i1])
-            part.area += area
-            part.perimeter[r] += length
-            k = idx[idx >= 0]
-            self._runs.append(_Run(part, r, self._snap_tip(r, v[i0], before, psi, part),
-                                   self._snap_tip(r, v[i1 % n], after, psi, part),
-                                   int(k[0]) if len(k) else -1, int(k[-1]) if len(k) else -1))
-
-    def _run_true(self, r, idx, chords):
-        """(area to add to the polygon's, true length) of a run along rotor r whose
-        vertices have rotor-polygon indices ``idx`` (-1: a new vertex at an end)."""
-        rd = self._rotor_data[r]
-        m = len(rd.polygon)
-        k = idx[idx >= 0]
-        length = float(chords.sum())
-        area = GROW * self.C * length  # the polygon runs along the grown rotor
-        if len(k) < 2:
-            return area, length
-        step = (k[1:] - k[:-1] + m // 2) % m - m // 2
-        if not np.all(np.abs(step) == 1):
-            return area, length
-        # The fluid lies outside the rotor: it runs along it clockwise (step -1), and
-        # the curve's slivers are outside its chords.
-        e = np.where(step < 0, k[1:], k[:-1]) % m
-        inner = float(rd.length[e].sum())
-        length += inner - float(np.sum(chords[_inner_edges(idx)]))
-        area += float(np.sum(step * rd.sliver[e]))
-        return area, length
-
-    def _snap_tip(self, r, x, neighbour, psi, part: Part):
-        """The end of rotor r's wetted arc at polygon vertex x where it meets a bore (the
-        lobe's tip point); None where it meets the other rotor (a contact, resolved per
-        overlap by :meth:`_contacts`); x itself where it meets the cusp line."""
-        if neighbour in (BORE_M, BORE_F):
-            tips = self.rotor_at(r, self._rotor_data[r].tips, psi)
-            k = int(np.argmin(np.linalg.norm(tips - x, axis=-1)))
-            part.tips.append((r, k, tips[k]))
-            return tips[k]
-        if neighbour in (MALE, FEMALE) and neighbour != r:
-            return (None, x)
-        return x
-
-    def _contacts(self, psi, lenses) -> None:
-        """Give both ends of every overlap of the grown rotors one contact point.
-
-        Where the rotors touch, the grown polygons overlap over a lens; its two ends
-        belong to the parts on either side.  A lens can hold more than one true contact
-        (conformal arcs touch along a band, with a pocket of sub-micron depth between),
-        so each end snapped to its nearest contact would leave the arc between them
-        wetted by nobody and the loads at uniform pressure unbalanced.  Every end of a
-        lens takes the one contact nearest the lens's middle (the pocket goes to one
-        side).
-        """
-        by_point = {}
-        rd = self._rotor_data[MALE]
-        m = len(rd.polygon)
-        for lens in lenses:
-            for ring in lens.to_polygons():
-                ring = ring / self.k
-                d, k = rd.tree.query(self.to_rotor(MALE, ring, psi))
-                on = d < SAME_VERTEX * self.C
-                ends = ring[~on & (self._female_distance(ring, psi) > SAME_VERTEX * self.C)]
-                if not len(ends):
-                    continue
-                idx = np.sort(k[on])
-                if len(idx) >= 2:
-                    gap = np.diff(np.append(idx, idx[0] + m))
-                    j = int(np.argmax(gap))  # the lens's male arc is the complement
-                    lo, hi = idx[(j + 1) % len(idx)], idx[j]
-                    c = self.pair.contact_between(rd.u, lo, hi, m, psi)
-                else:
-                    c = self.pair.contact_near(ends.mean(0), psi)
-                for e in ends:
-                    by_point[_key(e, self.C)] = (e, c)
-        known = list(by_point.values())
-        pts = np.array([e for e, _ in known]) if known else np.zeros((0, 2))
-        for q in self._runs:
-            for which in ("a", "b"):
-                end = getattr(q, which)
-                if isinstance(end, tuple):
-                    setattr(q, "contact_start" if which == "a" else "contact_end", True)
-                    # The fluid's corner is the lens's end up to Clipper's separate
-                    # rounding of the two Booleans (and, along a conformal band, the
-                    # chords' crossings): the nearest lens end within LENS_MATCH.
-                    d = np.linalg.norm(pts - end[1], axis=-1) if len(pts) else np.inf
-                    j = int(np.argmin(d)) if len(pts) else -1
-                    if j >= 0 and d[j] < LENS_MATCH * self.C:
-                        c = known[j][1]
-                    else:
-                        c = self.pair.contact_near(end[1], psi)
-                    setattr(q, which, c)
-                    if not any(c is d for d in q.part.contacts):
-                        q.part.contacts.append(c)
-
-    def _female_distance(self, pts, psi):
-        return self._rotor_data[FEMALE].tree.query(self.to_rotor(FEMALE, pts, psi))[0]
-
-    def _close_chains(self, psi) -> None:
-        """Make each rotor's wetted arcs meet end to start across every contact.
-
-        The fluid runs along a rotor clockwise; after a run that ends at a contact the
-        next run (the next start lower along the profile) must begin at that same
-        point, or the arc between them would be wetted by nobody (a sub-micron pocket
-        inside a lens whose two ends found different contacts).  The next run's start
-        takes the end's point; both are contacts of one lens.
-        """
-        for r in (MALE, FEMALE):
-            runs = [q for q in self._runs if q.rotor == r]
-            rd = self._rotor_data[r]
-            m = len(rd.polygon)
-            if len(runs) < 2:
-                continue
-            a_idx = np.array([rd.tree.query(self.to_rotor(r, q.a, psi))[1] for q in runs])
-            for q in runs:
-                if not q.contact_end:
-                    continue
-                b = rd.tree.query(self.to_rotor(r, q.b, psi))[1]
-                below = (b - a_idx) % m
-                j = int(np.argmin(np.where(below == 0, m, below) if False else below))
-                nxt = runs[j]
-                if nxt is not q and nxt.contact_start:
-                    nxt.a = q.b
-
-    def _loads(self) -> None:
-        for q in self._runs:
-            d = q.b - q.a
-            q.part.force[q.rotor] += (d[1], -d[0])
-            o = self.O[q.rotor]
-            q.part.torque[q.rotor] += -0.5 * (np.sum((q.b - o) ** 2) - np.sum((q.a - o) ** 2))
-
-    def _groove_age(self, rotor, centroid, psi, side):
+    def _groove_age(self, rotor, centroid, psi, side, groove=None):
         """(groove index, age in male-angle units) of a part (module docstring)."""
         pair = self.pair
         n = pair.gearing.lobes_male if rotor == MALE else pair.gearing.lobes_female
         period = TWO_PI / n
-        local = self.to_rotor(rotor, centroid, psi)
         tip0 = pair.tip_angle(rotor)
-        k = int(math.floor(((math.atan2(local[1], local[0]) - tip0) % TWO_PI) / period)) % n
+        if groove is None:
+            local = self.to_rotor(rotor, centroid, psi)
+            groove = int(math.floor(((math.atan2(local[1], local[0]) - tip0) % TWO_PI)
+                                    / period)) % n
+        k = groove
         mid = tip0 + (k + 0.5) * period  # the groove's mid-line, own frame
         if rotor == MALE:
             theta = math.remainder(mid + psi, TWO_PI)  # 0: facing the female axis
@@ -515,12 +301,6 @@ class SectionCutter:
         else:
             age = theta % TWO_PI
         return k, age * scale
-
-
-def _inner_edges(idx):
-    """Edges of a run (from vertex i to i + 1) whose both ends are rotor vertices."""
-    ok = idx >= 0
-    return np.nonzero(ok[:-1] & ok[1:])[0]
 
 
 def _inside(ring, pt) -> bool:

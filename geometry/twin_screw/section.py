@@ -24,7 +24,6 @@ chamber beyond is older ("interlobe-lead"), in the dying part younger ("-trail")
 
 from __future__ import annotations
 
-import math
 from collections import defaultdict
 
 import numpy as np
@@ -56,7 +55,7 @@ def _female_shift(pair, parts_by_section, psis) -> float:
     period = TWO_PI / pair.gearing.lobes_male
     b0 = _beta0(pair)
     frac = None
-    for psi, parts in zip(psis, parts_by_section):
+    for psi, parts in zip(psis, parts_by_section, strict=True):
         for p in parts:
             if p.rotor == FEMALE:
                 x = (p.age - psi - b0) / period
@@ -64,7 +63,7 @@ def _female_shift(pair, parts_by_section, psis) -> float:
                 break
         if frac is not None:
             break
-    for psi, parts in zip(psis, parts_by_section):
+    for psi, parts in zip(psis, parts_by_section, strict=True):
         bottom = defaultdict(dict)
         for p in parts:
             if p.side == "bottom":
@@ -105,9 +104,9 @@ def section_chamber(pair, points_per_period: int = POINTS_PER_PERIOD) -> Section
     nodes = defaultdict(lambda: {"area": 0.0, "force": np.zeros((2, 2)),
                                  "torque": np.zeros(2), "perimeter": np.zeros(2),
                                  "seals": []})
-    for m, (psi, parts) in enumerate(zip(psis, scans)):
+    for m, (psi, parts) in enumerate(zip(psis, scans, strict=True)):
         qs = [chamber_index(pair, p, psi, shift) for p in parts]
-        for p, q in zip(parts, qs):
+        for p, q in zip(parts, qs, strict=True):
             node = nodes[m + q * points_per_period]
             node["area"] += p.area
             node["force"] += p.force
@@ -122,7 +121,7 @@ def _seals(pair, parts, qs):
     """(chamber, track name, kind, point, chamber beyond) of every sealing point."""
     out = []
     tips = defaultdict(list)
-    for p, q in zip(parts, qs):
+    for p, q in zip(parts, qs, strict=True):
         for rotor, k, pt in p.tips:
             tips[(rotor, k)].append((p, q, pt))
     for (rotor, k), seen in tips.items():
@@ -137,9 +136,9 @@ def _seals(pair, parts, qs):
             name = f"tip-{'male' if rotor == MALE else 'female'}-{'lead' if leading else 'trail'}"
             out.append((q, name, "tip", pt, q2))
     tol = SAME_POINT * pair.gearing.centre_distance
-    contacts = [(p, q, c) for p, q in zip(parts, qs) for c in p.contacts]
-    for i, (p, q, c) in enumerate(contacts):
-        for j, (p2, q2, c2) in enumerate(contacts):
+    contacts = [(p, q, c) for p, q in zip(parts, qs, strict=True) for c in p.contacts]
+    for i, (_, q, c) in enumerate(contacts):
+        for j, (_, q2, c2) in enumerate(contacts):
             if j != i and q2 != q and np.linalg.norm(c - c2) < tol:
                 out.append((q, "interlobe-lead" if q2 > q else "interlobe-trail",
                             "interlobe", c, q2))

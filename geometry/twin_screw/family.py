@@ -1,0 +1,103 @@
+"""The twin-screw family's [machine] section: rack-generated pairs (seeds 003, 004).
+
+[machine] keys (besides type and length_mm):
+
+* ``profile``: "circular" (the symmetric circular rack, :mod:`.circular`) or
+  "line-circle" (an asymmetric rack of this project's own making, :mod:`.asymmetric`);
+* ``lobes_male``, ``lobes_female``: any combination (3/5, 4/5, 4/6, 5/6, 5/7, ...);
+* ``centre_distance_mm``: the pitch circles follow, r = C N / (N1 + N2);
+* ``male_diameter_mm``, ``female_diameter_mm``: the outer diameters, which fix the
+  rack's depth on each side of the pitch line;
+* ``tip_radius_mm`` (optional): the rack's male-tip circle; by default the one that
+  centres the female tip's circle on the pitch line (circular) or 0.9 of it
+  (line-circle, so that the straight flank exists).
+"""
+
+from __future__ import annotations
+
+from rotorflow.errors import CaseError
+
+from ..family import Family, number
+from .asymmetric import asymmetric_pair
+from .circular import symmetric_circular_pair
+from .meshing import Gearing
+from .pair import TwinScrewPair
+
+KEYS = frozenset({"profile", "lobes_male", "lobes_female", "centre_distance_mm",
+                  "male_diameter_mm", "female_diameter_mm", "tip_radius_mm"})
+PROFILES = {"circular": symmetric_circular_pair, "line-circle": asymmetric_pair}
+#: The line-circle rack's default male-tip circle, per the centred one: 10 % smaller
+#: leaves room for the straight flank between the circles.
+LINE_CIRCLE_TIP = 0.9
+
+
+def centred_tip_radius(gearing: Gearing, male_addendum: float, female_addendum: float):
+    """The rack's male-tip radius that puts the female tip's circle centre on the pitch
+    line (the circular rack's two circles then meet at the pitch line)."""
+    half, h = 0.5 * gearing.pitch, male_addendum + female_addendum
+    return (h * h + half * half) / (2.0 * h) - female_addendum
+
+
+def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: float,
+          male_diameter: float, female_diameter: float,
+          tip_radius: float | None = None) -> TwinScrewPair:
+    """A checked pair (SI lengths)."""
+    if profile not in PROFILES:
+        raise CaseError(f"unknown twin-screw profile {profile!r} "
+                        f"(known: {', '.join(sorted(PROFILES))})")
+    g = Gearing(centre_distance, lobes_male, lobes_female)
+    hm = 0.5 * male_diameter - g.r1
+    hf = 0.5 * female_diameter - g.r2
+    if not hm > 0.0:
+        raise CaseError(f"the male diameter {male_diameter * 1e3:.4g} mm is inside its pitch "
+                        f"circle ({2e3 * g.r1:.4g} mm): the male has no addendum")
+    if hf < 0.0:
+        raise CaseError(f"the female diameter {female_diameter * 1e3:.4g} mm is inside its "
+                        f"pitch circle ({2e3 * g.r2:.4g} mm)")
+    if tip_radius is None:
+        tip_radius = centred_tip_radius(g, hm, hf)
+        if profile == "line-circle":
+            tip_radius *= LINE_CIRCLE_TIP
+    male, female = PROFILES[profile](g, hm, hf, tip_radius)
+    return TwinScrewPair(g, male, female, profile)
+
+
+def from_section(m: dict, where: str) -> TwinScrewPair:
+    for key in ("lobes_male", "lobes_female", "centre_distance_mm", "male_diameter_mm",
+                "female_diameter_mm"):
+        if key not in m:
+            raise CaseError(f"missing key '{key}' in {where}")
+    n1 = number(m, "lobes_male", where, integer=True)
+    n2 = number(m, "lobes_female", where, integer=True)
+    if n1 < 1 or n2 < 1:
+        raise CaseError(f"lobe counts must be positive in {where}, got {n1}/{n2}")
+    c = number(m, "centre_distance_mm", where) * 1e-3
+    if not c > 0.0:
+        raise CaseError(f"centre_distance_mm must be positive in {where}")
+    d1 = number(m, "male_diameter_mm", where) * 1e-3
+    d2 = number(m, "female_diameter_mm", where) * 1e-3
+    if not (d1 > 0.0 and d2 > 0.0):
+        raise CaseError(f"the rotor diameters must be positive in {where}")
+    if d1 / 2 + d2 / 2 <= c:
+        raise CaseError(f"the bores do not meet in {where}: the outer radii "
+                        f"({d1 * 500:.4g} + {d2 * 500:.4g} mm) must exceed the centre "
+                        f"distance ({c * 1e3:.4g} mm)")
+    tip = number(m, "tip_radius_mm", where) * 1e-3 if "tip_radius_mm" in m else None
+    try:
+        return build(m.get("profile", "circular"), n1, n2, c, d1, d2, tip)
+    except CaseError as e:
+        raise CaseError(f"{e} ({where})") from None
+
+
+def examples() -> dict[str, TwinScrewPair]:
+    """Pairs for the family contract tests: seed 004's 4/6 machine size (male 100 mm,
+    female 96 mm; the centre distance, not given there, assumed 78 mm) with the
+    circular and the line-circle rack."""
+    return {
+        "circular-4-6": build("circular", 4, 6, 0.078, 0.100, 0.096),
+        "line-circle-4-6": build("line-circle", 4, 6, 0.078, 0.100, 0.096),
+    }
+
+
+#: Registered (``register(FAMILY)``) once the family contract holds: see __init__.
+FAMILY = Family("twin-screw", KEYS, from_section, examples)

@@ -8,8 +8,11 @@ built yet, so nothing here registers itself with :mod:`..family`.
 from .arcs import CircleArc, EllipseArc, Line, ParabolaArc
 from .circular import symmetric_circular_pair, symmetric_circular_rack
 from .meshing import Gearing, MaleGenerated, OnRotor, RackGenerated
+from .pin_cycloid import pin_cycloid_from_diameters, pin_cycloid_pair
+from .point_generated import PointTrace
 from .profiles import TwinProfile, rack_pair
 
 __all__ = ["CircleArc", "EllipseArc", "Gearing", "Line", "MaleGenerated", "OnRotor",
-           "ParabolaArc", "RackGenerated", "TwinProfile", "rack_pair",
+           "ParabolaArc", "PointTrace", "RackGenerated", "TwinProfile",
+           "pin_cycloid_from_diameters", "pin_cycloid_pair", "rack_pair",
            "symmetric_circular_pair", "symmetric_circular_rack"]

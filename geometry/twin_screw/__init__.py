@@ -8,12 +8,16 @@ Not registered yet: the section tables hold the area and per-section load invari
 (the chamber's area rate and its torques disagree by ~10 % at birth: open, issue 13),
 so `[machine] type = "twin-screw"` is still refused.
 """
+
 from .arcs import CircleArc, EllipseArc, Line, ParabolaArc
 from .circular import symmetric_circular_pair, symmetric_circular_rack
 from .meshing import Gearing, MaleGenerated, OnRotor, RackGenerated
 from .pair import TwinScrewPair
+from .pin_cycloid import pin_cycloid_from_diameters, pin_cycloid_pair
+from .point_generated import PointTrace
 from .profiles import TwinProfile, rack_pair
 
 __all__ = ["CircleArc", "EllipseArc", "Gearing", "Line", "MaleGenerated", "OnRotor",
-           "ParabolaArc", "RackGenerated", "TwinProfile", "TwinScrewPair", "rack_pair",
+           "ParabolaArc", "PointTrace", "RackGenerated", "TwinProfile", "TwinScrewPair",
+           "pin_cycloid_from_diameters", "pin_cycloid_pair", "rack_pair",
            "symmetric_circular_pair", "symmetric_circular_rack"]

@@ -158,7 +158,7 @@ def family_for(type_: object, where: str) -> Family:
 
 def _load_builtin() -> None:
     # The built-in families register themselves on import.
-    from . import internal_gear  # noqa: F401
+    from . import internal_gear, twin_screw  # noqa: F401
 
 
 def number(section: dict, key: str, where: str, *, integer: bool = False):

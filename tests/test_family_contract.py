@@ -42,6 +42,11 @@ class FamilyContract:
     """Subclass with ``family = "<[machine] type>"``."""
 
     family: str = ""
+    #: Net load at uniform pressure per p D^2 L (torque) and p D L (force): 1e-9 is
+    #: round-off, what a family whose sections are closed forms reaches.
+    load_tol: float = 1e-9
+    #: Chambers plus rotors against the working area, relative.
+    area_tol: float = 1e-9
 
     @pytest.fixture(scope="class")
     @classmethod
@@ -58,8 +63,9 @@ class FamilyContract:
                 _, torque, force = net_loads(m, np.full_like(m.curves.volume, P_UNIFORM))
                 d = pair.diameter
                 # Loads per chamber are of order p D^2 L; 1e-9 of that is round-off.
-                assert np.abs(torque).max() < 1e-9 * P_UNIFORM * d * d * L, (name, sweep.kind)
-                assert np.abs(force).max() < 1e-9 * P_UNIFORM * d * L, (name, sweep.kind)
+                assert np.abs(torque).max() < self.load_tol * P_UNIFORM * d * d * L, \
+                    (name, sweep.kind)
+                assert np.abs(force).max() < self.load_tol * P_UNIFORM * d * L, (name, sweep.kind)
 
     def test_chambers_and_rotors_fill_the_working_space(self, pairs):
         for name, pair in pairs.items():
@@ -69,7 +75,8 @@ class FamilyContract:
                 # chambers one period apart share grid nodes: every chamber present at
                 # the state of node j is at node j + k PPP
                 chambers = float(sec.area[j::PPP].sum())
-                assert chambers + inside == pytest.approx(pair.working_area, rel=1e-9), name
+                assert chambers + inside == pytest.approx(pair.working_area,
+                                                          rel=self.area_tol), name
 
     def test_helical_tends_to_straight(self, pairs):
         for name, pair in pairs.items():
@@ -125,3 +132,13 @@ class TestInternalGear(FamilyContract):
 def test_every_family_keeps_the_contract():
     covered = {c.family for c in FamilyContract.__subclasses__()}
     assert set(families()) <= covered
+
+
+class TestTwinScrew(FamilyContract):
+    family = "twin-screw"
+    # The sections are cut from polygons sampled to 1e-6 C (regions.py): the wetted arcs'
+    # ends at a contact inside a conformal band are matched to ~1e-7 m, which leaves
+    # 1.3e-6 of p D^2 L unbalanced at worst (line-circle 4/6), and the areas carry the
+    # runs' ends at cuts, 7e-9 of the working area (measured).
+    load_tol = 1e-5
+    area_tol = 1e-7

@@ -26,6 +26,10 @@ SAME_VERTEX = 1e-9
 #: a little away from where the lens's Boolean put its end.
 LENS_MATCH = 2e-3
 
+#: A cut at the cusp this near a tip (per C) ends at the tip: a rounded tip nearly as
+#: curved as its bore overlaps it over a lens of up to ~0.2 mm at C = 78 mm.
+TIP_MATCH = 5e-3
+
 MALE, FEMALE, BORE_M, BORE_F, CUSP, NEW = 0, 1, 2, 3, 4, -1
 
 
@@ -173,6 +177,15 @@ class Boundaries:
             return tips[k]
         if neighbour in (MALE, FEMALE) and neighbour != r:
             return (None, x)
+        if neighbour == CUSP:
+            # A tip passing the cusp: the bore and the cusp line meet there, and the part
+            # on one side may end its arc at the bore (snapped to the tip) while the
+            # other ends it at the cusp line a lens's length away.  Both take the tip.
+            tips = self.rotor_at(r, self._rotor_data[r].tips, psi)
+            d = np.linalg.norm(tips - x, axis=-1)
+            k = int(np.argmin(d))
+            if d[k] < TIP_MATCH * self.C:
+                return tips[k]
         return x
 
     def _contacts(self, psi, lenses) -> None:

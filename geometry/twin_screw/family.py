@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from rotorflow.errors import CaseError
 
-from ..family import Family, number
+from ..family import Family, number, register
 from .asymmetric import asymmetric_pair
 from .circular import symmetric_circular_pair
 from .meshing import Gearing
@@ -99,5 +99,4 @@ def examples() -> dict[str, TwinScrewPair]:
     }
 
 
-#: Registered (``register(FAMILY)``) once the family contract holds: see __init__.
-FAMILY = Family("twin-screw", KEYS, from_section, examples)
+FAMILY = register(Family("twin-screw", KEYS, from_section, examples))

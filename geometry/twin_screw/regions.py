@@ -57,6 +57,9 @@ CUSP_PROBE = 2e-3
 #: An isolated piece within this fraction of a whole groove's area is a whole groove
 #: (the first one must be at least this fraction of C^2).
 WHOLE_FRACTION = 1e-2
+#: A pocket's area rate (per C^2 and radian) below this is no rate: it is handed over
+#: by the side of the line of centres it lies on.
+POCKET_RATE = 1e-12
 #: Gauss nodes per polygon edge for its sliver and length (the edge is a short smooth
 #: arc: 6 nodes integrate it to rounding).
 SLIVER_NODES = 6
@@ -106,6 +109,7 @@ class Part:
     contacts: list = field(default_factory=list)  # points
     side: str = ""  # "top" (newborn side), "bottom" (dying side) or "" (isolated)
     piece: int = 0  # which connected piece of the whole fluid it was cut from
+    centroid: np.ndarray | None = None  # set until its age is known
     polygons: list = field(default_factory=list)  # rings, metres, fixed frame
 
 
@@ -214,6 +218,11 @@ class SectionCutter(Boundaries):
         self._contacts(psi, (polys[0] ^ polys[1]).decompose())
         self._close_chains(psi)
         self._loads()
+        for part in parts:
+            if part.centroid is not None:
+                rate = part.torque[MALE] - self.ratio * part.torque[FEMALE]
+                part.groove, part.age = self._groove_age(part.rotor, part.centroid, psi,
+                                                         part.side, rate=rate)
         return parts
 
     def _isolated(self, rotor, x0, x1) -> bool:
@@ -270,12 +279,18 @@ class SectionCutter(Boundaries):
                     side=side, polygons=rings)
         for ring in rings:
             self._walk(ring, psi, part)
-        cen = _centroid(rings[0])
-        part.groove, part.age = self._groove_age(rotor, cen, psi, side)
+        part.centroid = _centroid(rings[0])
         return part
 
-    def _groove_age(self, rotor, centroid, psi, side, groove=None):
-        """(groove index, age in male-angle units) of a part (module docstring)."""
+    def _groove_age(self, rotor, centroid, psi, side, groove=None, rate=0.0):
+        """(groove index, age in male-angle units) of a part (module docstring).
+
+        A pocket in the mesh that reaches neither cusp (trapped between contacts, or
+        open to both sides) belongs to the dying chamber while it shrinks and to the
+        newborn one while it grows (``rate``: its area's rate per male angle, which is
+        its torques' power): so it changes hands at its smallest, and the chambers'
+        areas stay continuous but for that carry-over.
+        """
         pair = self.pair
         n = pair.gearing.lobes_male if rotor == MALE else pair.gearing.lobes_female
         period = TWO_PI / n
@@ -297,7 +312,10 @@ class SectionCutter(Boundaries):
         elif side == "bottom":
             age = theta + TWO_PI
         elif abs(theta) < period:  # a pocket in the mesh
-            age = theta if centroid[1] > 0.0 else theta + TWO_PI
+            if abs(rate) > POCKET_RATE * self.C ** 2:
+                age = theta if rate > 0.0 else theta + TWO_PI
+            else:
+                age = theta if centroid[1] > 0.0 else theta + TWO_PI
         else:
             age = theta % TWO_PI
         return k, age * scale

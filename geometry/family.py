@@ -115,6 +115,11 @@ class RotorPair(ABC):
         sealing lines to chambers two or more periods away that the sweep found, and
         the lines of the section's further tracks, keyed (track name, offset)."""
 
+    def face_columns(self, machine) -> dict[str, np.ndarray]:
+        """Table columns of the family's own end-face paths (none by default: the
+        end faces leak to the plena along the chamber's rotor edges)."""
+        return {}
+
     def rotor(self, name: str) -> Rotor:
         for r in self.rotors:
             if r.name == name:

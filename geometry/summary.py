@@ -83,6 +83,7 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     load_columns, rotor_scalars = _rotor_loads(m)
     tracks = m.track_lines
     load_columns.update({track_column(name, d): v for (name, d), v in tracks.items()})
+    load_columns.update(pair.face_columns(m))
     return ChamberTable(
         angle_rad=cur.phi - cur.phi[0],
         volume_m3=cur.volume,

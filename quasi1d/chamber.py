@@ -78,8 +78,10 @@ class ChamberGeometry:
 
 
 def prepare(table, volume_ratio, suction_close, discharge_open, speed_rpm,
-            vanish_fraction) -> ChamberGeometry:
-    """Check a ChamberTable and derive everything the model needs from it."""
+            vanish_fraction, early_opening: float = 0.0) -> ChamberGeometry:
+    """Check a ChamberTable and derive everything the model needs from it
+    (``early_opening``: how much before the built-in volume ratio's angle the discharge
+    port opens, seed 004)."""
     a = np.asarray(table.angle_rad, dtype=float)
     V = np.asarray(table.volume_m3, dtype=float)
     dV = np.asarray(table.dVdangle_m3_rad, dtype=float)
@@ -131,7 +133,7 @@ def prepare(table, volume_ratio, suction_close, discharge_open, speed_rpm,
         if target <= thr:
             raise CaseError(f"volume_ratio {volume_ratio} leaves a discharge volume below the "
                             f"vanishing threshold of the chamber table")
-        do = _crossing(geo, a, V, target, imax, a.size - 1)
+        do = _crossing(geo, a, V, target, imax, a.size - 1) - early_opening
         if do <= sc:
             raise CaseError("the discharge port would open before the suction port closes; "
                             "lower volume_ratio or set suction_close_deg")

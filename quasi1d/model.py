@@ -373,6 +373,25 @@ def _flux(seg: Segment, x, k1, scalar_k: bool):
 
 
 # ---------------------------------------------------------------------------------------
+def _oil_flooded_discharge_T(fluid, suc: Plenum, op: Operating) -> float:
+    """The discharge plenum's temperature with oil injected: gas and oil compressed
+    together without losses, in thermal equilibrium from the moment they mix.
+
+    What flows back from the discharge is that mixture's gas, not gas compressed dry
+    (which, at a pressure ratio of 11, would be ~300 K hotter than what the oil lets
+    out).  With x kg of oil per kg of gas, (cp + x c_oil) dT = v dp gives
+    T2 = T1 (p2 / p1)^(R / (cp + x c_oil)), T1 the adiabatic mixing temperature of
+    gas at suction and oil at injection.
+    """
+    T1g, x, co = op.T_suction_K, op.oil_mass_ratio, op.oil_cp_J_kgK
+    h_lo = fluid.state_pT(op.p_suction_Pa, T1g - 0.5)[2]
+    h_hi = fluid.state_pT(op.p_suction_Pa, T1g + 0.5)[2]
+    cp = float(h_hi - h_lo)
+    R = op.p_suction_Pa / (suc.rho * T1g)
+    T1 = (cp * T1g + x * co * op.oil_temperature_K) / (cp + x * co)
+    return T1 * op.pressure_ratio ** (R / (cp + x * co))
+
+
 def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Ports) -> ChamberModel:
     def plenum(p, T):
         rho, u, h = fluid.state_pT(p, T)
@@ -388,6 +407,8 @@ def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Port
     else:
         h_is = suc.h + fluid.work_isentropic(op.p_suction_Pa, op.T_suction_K, op.p_discharge_Pa)
         Td = fluid.T_ph(op.p_discharge_Pa, h_is)
+    if op.oil_mass_ratio > 0:
+        Td = _oil_flooded_discharge_T(fluid, suc, op)
     dis = plenum(op.p_discharge_Pa, Td)
     n = geo.slots
     nv = 4 if op.oil_mass_ratio > 0 else 2

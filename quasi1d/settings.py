@@ -125,6 +125,9 @@ class Operating:
     volume_ratio: float | None = None
     suction_close_rad: float | None = None
     discharge_open_rad: float | None = None
+    # Seed 004: the discharge port opens this much earlier than the built-in volume
+    # ratio says (ahead of over-compression; an interior optimum, its Fig. 7).
+    discharge_early_opening_rad: float = 0.0
     T_wall_K: float | None = None  # None: equal to T_suction_K
     heat_transfer_W_m2K: float = 0.0  # 0: adiabatic chambers (seed 001 neglects heat transfer)
     heat_capacity: str = "temperature"  # ideal-gas "air" only: cp(T), or "constant"
@@ -140,6 +143,7 @@ class Operating:
     KEYS = (
         "p_suction_bar", "p_discharge_bar", "T_suction_K", "speed_rpm", "fluid",
         "volume_ratio", "suction_close_deg", "discharge_open_deg", "T_wall_K",
+        "discharge_early_opening_deg",
         "heat_transfer_W_m2K", "heat_capacity", "molar_mass_g_mol", "cp_J_kgK",
         "oil_mass_ratio", "T_oil_K",
         "oil_cp_J_kgK", "oil_time_constant_ms",
@@ -201,6 +205,11 @@ class Operating:
             sc = math.radians(_number(d, "suction_close_deg", s, where, nonnegative=True))
         if do is not None:
             do = math.radians(_number(d, "discharge_open_deg", s, where, nonnegative=True))
+        early = math.radians(_number(d, "discharge_early_opening_deg", s, where, 0.0,
+                                     nonnegative=True))
+        if early and do is not None:
+            raise CaseError(f"give discharge_open_deg or discharge_early_opening_deg in [{s}] "
+                            f"of {where}, not both")
         if sc is not None and do is not None and do <= sc:
             raise CaseError(
                 f"discharge_open_deg must be later than suction_close_deg in [{s}] of {where}"
@@ -226,6 +235,7 @@ class Operating:
             volume_ratio=vr,
             suction_close_rad=sc,
             discharge_open_rad=do,
+            discharge_early_opening_rad=early,
             T_wall_K=None if Tw is None else _number(d, "T_wall_K", s, where, positive=True),
             heat_transfer_W_m2K=_number(d, "heat_transfer_W_m2K", s, where, 0.0, nonnegative=True),
             heat_capacity=heat_capacity,

@@ -28,7 +28,8 @@ def build_model(table, operating: Operating, leakage: Leakage | None = None,
     numerics = numerics or Numerics()
     operating.check_ideal_gas()
     geo = prepare(table, operating.volume_ratio, operating.suction_close_rad,
-                  operating.discharge_open_rad, operating.speed_rpm, numerics.vanish_fraction)
+                  operating.discharge_open_rad, operating.speed_rpm, numerics.vanish_fraction,
+                  operating.discharge_early_opening_rad)
     fluid = make_fluid(operating, geo.v_max / geo.v_discharge)
     return build(geo, fluid, operating, leakage, ports)
 

@@ -5,11 +5,20 @@ the casing, the interlobe line between the rotors, and the front (end-face) line
 discharge end; the blow-hole goes with the tip lines.  Each tip and interlobe line is a
 track of the section (:class:`..section.Track`) swept along the rotors; a line between
 two chambers is seen from both (a male groove's leading tip is its older neighbour's
-trailing tip), so one path carries both columns.  The end faces leak to the suction
-(low-pressure plate) and the discharge (high-pressure plate).
+trailing tip), so one path carries both columns.
+
+End faces (seed 003's front sealing line): a groove's section on an end plate is
+separated from the next groove's by the lobe between them, and gas crosses the lobe's
+end face through the end clearance from the older chamber into the younger.  The line
+is the lobes' radial extent (each rotor's lobe depth), present while both chambers have
+a section on that plate.  (The internal gear's end faces leak to the plena along the
+chamber's whole rotor edge; a twin-screw groove reaches the discharge plate long before
+it opens to the port, so that would blow discharge gas into chambers still filling.)
 """
 
 from __future__ import annotations
+
+import numpy as np
 
 from ..table import LeakagePath, track_column
 
@@ -29,8 +38,8 @@ def _partner(name: str) -> str | None:
 def twin_screw_paths(track_lines: dict) -> tuple[LeakagePath, ...]:
     """Paths for the tracks' lines (keys (track name, offset)) and the end faces."""
     paths = [
-        LeakagePath("lp-face", "end-face", "suction", "seal_lp_face_m", report="lp_face"),
-        LeakagePath("hp-face", "end-face", "discharge", "seal_hp_face_m", report="hp_face"),
+        LeakagePath("lp-front+1", "end-face", 1, "seal_front_lp_m", report="lp_face"),
+        LeakagePath("hp-front+1", "end-face", 1, "seal_front_hp_m", report="hp_face"),
     ]
     kinds = {"tip": "tip", "interlobe": "interlobe"}
     done = set()
@@ -47,3 +56,17 @@ def twin_screw_paths(track_lines: dict) -> tuple[LeakagePath, ...]:
             f"{name}{d:+d}", kind, d, track_column(name, d),
             mirror=None if mirror is None else track_column(*mirror), report=kind))
     return tuple(paths)
+
+
+def front_lines(pair, machine) -> dict:
+    """The end-face lines to the next (older) chamber on each plate (module docstring)."""
+    cur = machine.curves
+    k = machine.points_per_period
+    depth = sum(pair.lobe_depths)
+    out = {}
+    for face, area in (("lp", cur.area_lp), ("hp", cur.area_hp)):
+        here = area > 0.0
+        older = np.zeros_like(here)
+        older[:-k] = here[k:]
+        out[f"seal_front_{face}_m"] = depth * (here & older)
+    return out

@@ -269,6 +269,20 @@ class TwinScrewPair(RotorPair):
                      self.male.area, self.female.area))
         return hashlib.sha256(text.encode()).hexdigest()[:8]
 
+    @cached_property
+    def lobe_depths(self) -> tuple[float, float]:
+        """Each rotor's lobe depth, outer radius less root radius."""
+        out = []
+        for profile, radius in ((self.male, self.male_radius), (self.female, self.female_radius)):
+            u = np.linspace(0.0, profile.n, 64 * profile.n, endpoint=False)
+            out.append(radius - float(np.linalg.norm(profile.point(u), axis=-1).min()))
+        return out[0], out[1]
+
+    def face_columns(self, machine) -> dict:
+        from .leakage import front_lines
+
+        return front_lines(self, machine)
+
     def leakage_paths(self, far_lines, track_lines=None) -> tuple:
         from .leakage import twin_screw_paths
 

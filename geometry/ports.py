@@ -61,7 +61,8 @@ class PortTiming:
 
 def port_timing(machine: SweptMachine, volume_ratio: float,
                 suction_close: float | None = None,
-                discharge_open: float | None = None) -> PortTiming:
+                discharge_open: float | None = None,
+                early_opening: float = 0.0) -> PortTiming:
     cur = machine.curves
     age = cur.phi - cur.phi[0]
     v = cur.volume
@@ -77,7 +78,7 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
                             "port can be placed")
         k = imax + int(after[0])
         f = (v[k - 1] - target) / (v[k - 1] - v[k])
-        do = float(age[k - 1] + f * (age[k] - age[k - 1]))
+        do = float(age[k - 1] + f * (age[k] - age[k - 1])) - early_opening
     else:
         do = float(discharge_open)
     if not 0.0 < sc < do < death:
@@ -202,3 +203,39 @@ def ports(machine: SweptMachine, timing: PortTiming):
     sealed_hp = port_region(machine, min(wrap, timing.discharge_open), timing.discharge_open,
                             "hp", hulls=True)
     return (_fill_small_holes(suction - sealed), _fill_small_holes(discharge - sealed_hp))
+
+
+#: Ages per lobe period at which the open port areas are cut (linear between): a port
+#: edge sweeps the chamber's footprint smoothly, and 24 samples resolve its opening.
+AREA_STEP_PER_PERIOD = 24
+
+
+def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray):
+    """(suction, discharge): the area through which the chamber is open to each port at
+    every age of ``ages`` (its face section inside the port), m2.
+
+    The chamber's face section is what an end face would offer if the whole plate were
+    open; the port is only part of it, so a chamber opening to the discharge port sees
+    an area that grows from nothing (seed 004's point: the early-opened port is small at
+    first and throttles the gas).
+    """
+    from manifold3d import CrossSection, FillRule
+
+    suction, discharge = ports(machine, timing)
+    sec = machine.section
+    sw = machine.sweep
+    step = machine.pair.period / AREA_STEP_PER_PERIOD
+    life = float(ages[-1])
+    grid = np.arange(0.0, life + step, step)
+    out = []
+    for port, shift, face in ((suction, 0.0, 0.0), (discharge, sw.wrap, sw.length)):
+        scale = float(sw.scale(face))
+        vals = np.zeros(len(grid))
+        for i, age in enumerate(grid):
+            polys = [q for q in chamber_section(machine, sec.phi_i + age - shift) if len(q) >= 3]
+            if polys:
+                chamber = CrossSection([np.ascontiguousarray(q * scale) for q in polys],
+                                       FillRule.Positive)
+                vals[i] = (chamber ^ port).area()
+        out.append(np.interp(ages, grid, vals))
+    return out[0], out[1]

@@ -84,12 +84,15 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     tracks = m.track_lines
     load_columns.update({track_column(name, d): v for (name, d), v in tracks.items()})
     load_columns.update(pair.face_columns(m))
+    area_lp, area_hp = cur.area_lp, cur.area_hp
+    if getattr(pair, "port_areas", False):
+        area_lp, area_hp = _port_areas(case, m)
     return ChamberTable(
         angle_rad=cur.phi - cur.phi[0],
         volume_m3=cur.volume,
         dVdangle_m3_rad=cur.dvolume,
-        area_lp_m2=cur.area_lp,
-        area_hp_m2=cur.area_hp,
+        area_lp_m2=area_lp,
+        area_hp_m2=area_hp,
         seal_next_m=lines.get(1, zero),
         seal_prev_m=lines.get(-1, zero),
         seal_lp_face_m=cur.perimeter_lp,
@@ -106,6 +109,22 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
         speed_ratios=tuple(float(r.speed_ratio) for r in pair.rotors),
         rotor_scalars=rotor_scalars,
     )
+
+
+def _port_areas(case, m: SweptMachine):
+    """The areas open to the ports against age, for a family whose chamber meets an end
+    plate long before the port (the twin screw's grooves reach the discharge plate
+    while still filling): its face section inside the port, not the whole section."""
+    from .ports import open_areas, port_timing
+
+    op = case.raw.get("operating", {})
+    early = math.radians(float(op.get("discharge_early_opening_deg", 0.0)))
+    sc, do = op.get("suction_close_deg"), op.get("discharge_open_deg")
+    timing = port_timing(m, case.volume_ratio,
+                         None if sc is None else math.radians(sc),
+                         None if do is None else math.radians(do), early)
+    cur = m.curves
+    return open_areas(m, timing, cur.phi - cur.phi[0])
 
 
 def _rotor_loads(m: SweptMachine) -> tuple[dict, dict]:

@@ -74,6 +74,8 @@ class TwinScrewPair(RotorPair):
     #: power balance of the loads' linear interpolant converges at second order and
     #: twice the curves' grid puts it at 2e-5 for the 4/6 examples (1e-4 at 1x).
     section_refinement = 2
+    #: The table's port areas are the face sections inside the ports (summary.py).
+    port_areas = True
 
     gearing: Gearing
     male: TwinProfile

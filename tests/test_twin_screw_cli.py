@@ -1,0 +1,67 @@
+"""The twin-screw family through the command line: its figures, and bad input.
+
+Bad input gives exit status 2, one line naming the problem, and nothing written.
+"""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from .conftest import CASES
+
+GOOD = (CASES / "twin_screw_4_6.toml").read_text()
+
+
+def run(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd)
+
+
+def test_geometry_of_the_4_6_machine():
+    out = run("geometry", CASES / "twin_screw_4_6.toml", "--json")
+    assert out.returncode == 0, out.stderr
+    fig = json.loads(out.stdout)
+    assert fig["machine"] == "twin-screw"
+    # The wraps are related by the lobe ratio: 325 deg on the male is 325 x 4/6 on the
+    # female (seed 004 Table 1a: 217 deg).
+    assert fig["wrap_female_deg"] == pytest.approx(325.0 * 4 / 6, rel=1e-12)
+    # Displacement per male turn: every chamber is one male and one female groove, and
+    # no chamber holds more than both whole grooves over the rotor length.
+    whole = (fig["groove_area_male_mm2"] + fig["groove_area_female_mm2"]) * 1e-6 * 0.130
+    assert 0.5 * whole < fig["chamber_volume_max_m3"] < whole
+    assert fig["swept_volume_m3"] == pytest.approx(4 * fig["chamber_volume_max_m3"])
+
+
+BAD = {
+    "no female lobes": (GOOD.replace("lobes_female = 6", "lobes_female = 0"), "lobe"),
+    # a 5-lobe male on the 4/6 diameters: the rack's tip circle cuts back into the flank
+    "undercut rack": (GOOD.replace("lobes_male = 4", "lobes_male = 5"), "undercut"),
+    "negative wrap": (GOOD.replace("wrap_male_deg = 325", "wrap_male_deg = -10"),
+                      "must not be negative"),
+    "two wraps": (GOOD.replace("wrap_male_deg = 325", "wrap_male_deg = 325\nwrap_female_deg = 217"),
+                  "exactly one"),
+    "bores apart": (GOOD.replace("centre_distance_mm = 78", "centre_distance_mm = 99"),
+                    "bores do not meet"),
+    "male inside its pitch circle": (GOOD.replace("male_diameter_mm = 100",
+                                                  "male_diameter_mm = 62"), "addendum"),
+    "unknown profile": (GOOD.replace('profile = "circular"', 'profile = "sigma"'),
+                        "unknown twin-screw profile"),
+    "internal-gear key": (GOOD.replace("[machine]", "[machine]\nlambda = 1.4"), "lambda"),
+    "driven rotor unknown": (GOOD.replace('driven = "male"', 'driven = "inner"'), "driven"),
+}
+
+
+@pytest.mark.parametrize("name", list(BAD))
+def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, name):
+    text, word = BAD[name]
+    case = tmp_path / "case.toml"
+    case.write_text(text)
+    before = sorted(tmp_path.iterdir())
+    out = run("geometry", case, "--json", cwd=tmp_path)
+    assert out.returncode == 2, out.stderr
+    assert out.stdout == ""
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and word in lines[0], out.stderr
+    assert sorted(tmp_path.iterdir()) == before

@@ -10,6 +10,7 @@ from pathlib import Path
 RESULTS = Path(__file__).resolve().parent / "results"
 MODULES = (
     "bench.bench_geometry",
+    "bench.bench_twin_screw",
     "bench.bench_quasi1d",
     "bench.bench_solids",
     "bench.bench_cfd",

@@ -115,6 +115,10 @@ class RotorPair(ABC):
         sealing lines to chambers two or more periods away that the sweep found, and
         the lines of the section's further tracks, keyed (track name, offset)."""
 
+    def swept_figures(self, machine) -> dict:
+        """The family's own figures of the swept pair (none by default)."""
+        return {}
+
     def face_columns(self, machine) -> dict[str, np.ndarray]:
         """Table columns of the family's own end-face paths (none by default: the
         end faces leak to the plena along the chamber's rotor edges)."""

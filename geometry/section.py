@@ -39,6 +39,8 @@ class Track:
     present: np.ndarray  # (n,) bool
     offset: np.ndarray  # (n,) int
     ids: np.ndarray  # (n,) int
+    #: d point / d psi where the family knows it exactly (None: differences of points)
+    rates: np.ndarray | None = None
 
 #: Default angle samples per lobe period of the section tables.
 POINTS_PER_PERIOD = 96
@@ -76,6 +78,8 @@ class SectionChamber:
         line, so differences never cross it.
         """
         if isinstance(which, Track):
+            if which.rates is not None:
+                return which.rates
             pts, ids = which.points, which.ids
         else:
             pts = self.lead if which == "lead" else self.trail

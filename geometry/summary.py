@@ -45,6 +45,7 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
         "case": case.name,
         "machine": pair.family,
         **pair.figures(),
+        **pair.swept_figures(m),
         "phi_i_deg": _deg(sec.phi_i),
         "phi_f_deg": _deg(sec.phi_f),
         **wraps,

@@ -233,12 +233,13 @@ class Boundaries:
                     d = np.linalg.norm(pts - end[1], axis=-1) if len(pts) else np.inf
                     j = int(np.argmin(d)) if len(pts) else -1
                     if j >= 0 and d[j] < LENS_MATCH * self.C:
-                        c = known[j][1]
+                        c, rate = known[j][1]
                     else:
-                        c = self.pair.contact_near(end[1], psi)
+                        c, rate = self.pair.contact_near(end[1], psi)
                     setattr(q, which, c)
                     if not any(c is d for d in q.part.contacts):
                         q.part.contacts.append(c)
+                        q.part.contact_rates.append(rate)
 
     def _female_distance(self, pts, psi):
         return self._rotor_data[FEMALE].tree.query(self.to_rotor(FEMALE, pts, psi))[0]

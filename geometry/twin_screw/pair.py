@@ -35,6 +35,11 @@ TIP_SCAN = 512
 CONTACT_WINDOW = 0.02
 #: Points of that window on which the law of gearing is bracketed.
 CONTACT_GRID = 17
+#: Male angles over one lobe period at which the contact line's length is figured.
+CONTACT_LINE_SAMPLES = 24
+#: Step in the profile parameter for the law of gearing's slope (central difference of
+#: analytic curves: 1e-6 of a piece leaves ~1e-10 relative error).
+LAW_STEP = 1e-6
 #: Parameter tolerance of a contact: 1e-13 of a piece is far below a nanometre.
 CONTACT_XTOL = 1e-13
 
@@ -161,10 +166,11 @@ class TwinScrewPair(RotorPair):
         vals = law(grid)
         sign = np.nonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[0]
         if not len(sign):
-            return np.asarray(x, dtype=float)  # no contact here: keep the polygon's corner
+            # No contact here: keep the polygon's corner, moving with neither rotor.
+            return np.asarray(x, dtype=float), np.zeros(2)
         j = int(sign[np.argmin(np.abs(grid[sign] - u0))])
         u = _illinois(law, grid[j], grid[j + 1], vals[j], vals[j + 1])
-        return rotate(male.point(np.array([u])), psi)[0]
+        return self._contact_at(u, psi)
 
     def contact_between(self, u_poly, lo: int, hi: int, m: int, psi: float) -> np.ndarray:
         """The contact point on the male between polygon vertices ``lo`` and ``hi``
@@ -183,12 +189,36 @@ class TwinScrewPair(RotorPair):
         vals = law(grid)
         sign = np.nonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[0]
         mid = 0.5 * (ulo + uhi)
-        if len(sign):
-            j = int(sign[np.argmin(np.abs(grid[sign] - mid))])
-            u = _illinois(law, grid[j], grid[j + 1], vals[j], vals[j + 1])
-        else:
-            u = mid
-        return rotate(male.point(np.array([np.mod(u, male.n)])), psi)[0]
+        if not len(sign):
+            # No root in the lens (a conformal band at its tangency): its middle, with
+            # no rate of its own (the band is not a sealing point that moves).
+            return rotate(male.point(np.array([np.mod(mid, male.n)])), psi)[0], np.zeros(2)
+        j = int(sign[np.argmin(np.abs(grid[sign] - mid))])
+        u = _illinois(law, grid[j], grid[j + 1], vals[j], vals[j + 1])
+        return self._contact_at(float(np.mod(u, male.n)), psi)
+
+    def _contact_at(self, u: float, psi: float):
+        """(point, d point / d psi) of the contact at male parameter u, fixed frame.
+
+        The contact moves along the male as the rotors turn: law(u, psi) = 0 gives
+        du/dpsi = -law_psi / law_u (implicit function), and the point R(psi) p(u)
+        moves by J R p + R p' du/dpsi.  The sealing lines need this rate (a contact runs
+        fast near the cusps, where differences between table nodes would blur it).
+        """
+        male = self.male
+        uu = np.array([u])
+        p, d, n = male.point(uu)[0], male.derivative(uu)[0], male.normal(uu)[0]
+        pitch = rotate(self.gearing.pitch_point[None, :], -psi)[0]
+        dpitch = np.array([pitch[1], -pitch[0]])  # d/dpsi of R(-psi) P
+        h = LAW_STEP
+        up, um = np.array([u + h]), np.array([u - h])
+        law_u = (cross(male.normal(up), pitch - male.point(up))[0]
+                 - cross(male.normal(um), pitch - male.point(um))[0]) / (2.0 * h)
+        law_psi = float(cross(n, dpitch))
+        du = -law_psi / law_u if law_u != 0.0 else 0.0
+        point = rotate(p[None, :], psi)[0]
+        rate = np.array([-point[1], point[0]]) + rotate((d * du)[None, :], psi)[0]
+        return point, rate
 
     @cached_property
     def _foot_grid(self):
@@ -227,6 +257,11 @@ class TwinScrewPair(RotorPair):
 
     @cached_property
     def _sections(self) -> dict:
+        return {}
+
+    @cached_property
+    def cut_memo(self) -> dict:
+        """Sections cut at residues of one period (:func:`.section.chamber_polygons`)."""
         return {}
 
     def chamber_polygons(self, phi: float, contacts: list | None = None):
@@ -270,6 +305,27 @@ class TwinScrewPair(RotorPair):
         text = repr((self.label, self.gearing, self.male_radius, self.female_radius,
                      self.male.area, self.female.area))
         return hashlib.sha256(text.encode()).hexdigest()[:8]
+
+    @property
+    def rack(self) -> tuple | None:
+        """The rack arcs that generated both rotors (None for a pair of other making)."""
+        arcs = [getattr(p, "arc", None) for p in self.male.pieces]
+        if all(getattr(p, "rotor", None) == "male" for p in self.male.pieces) and all(arcs):
+            return tuple(arcs)
+        return None
+
+    def swept_figures(self, machine) -> dict:
+        """Seed 004 Fig. 2: the interlobe contact line's length over one lobe period
+        (straight from the rack, :mod:`.contact_line`)."""
+        from .contact_line import contact_line_length
+
+        arcs = self.rack
+        if arcs is None or machine.sweep.kind == "conical":
+            return {}
+        thetas = np.linspace(0.0, self.period, CONTACT_LINE_SAMPLES, endpoint=False)
+        lengths = np.array([contact_line_length(self, arcs, machine.sweep, t) for t in thetas])
+        return {"contact_line_length_max_mm": float(lengths.max() * 1e3),
+                "contact_line_length_min_mm": float(lengths.min() * 1e3)}
 
     @cached_property
     def lobe_depths(self) -> tuple[float, float]:

@@ -107,6 +107,7 @@ class Part:
     perimeter: np.ndarray  # (2,) wetted rotor edge length
     tips: list = field(default_factory=list)  # (rotor, tip index, point)
     contacts: list = field(default_factory=list)  # points
+    contact_rates: list = field(default_factory=list)  # d point / d psi of each
     side: str = ""  # "top" (newborn side), "bottom" (dying side) or "" (isolated)
     piece: int = 0  # which connected piece of the whole fluid it was cut from
     centroid: np.ndarray | None = None  # set until its age is known

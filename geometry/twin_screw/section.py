@@ -39,6 +39,9 @@ SAME_POINT = 1e-6
 #: Sections over one period scanned for the male and female grooves that die together
 #: (any section where they share the bottom cusp will do).
 FEMALE_SHIFT_SCAN = 8
+#: Angles within this (rad) are one section; the memo of cut sections keeps this many.
+RESIDUE_TOL = 1e-9
+CUT_MEMO = 512
 #: A track point that moves more than this many times its median step between two
 #: nodes has jumped to another contact (a new identity, no rate across it).
 JUMP_FACTOR = 8.0
@@ -112,8 +115,9 @@ def section_chamber(pair, points_per_period: int = POINTS_PER_PERIOD) -> Section
             node["force"] += p.force
             node["torque"] += p.torque
             node["perimeter"] += p.perimeter
-        for q, name, kind, point, other in _seals(pair, parts, qs):
-            nodes[m + q * points_per_period]["seals"].append((name, kind, point, other - q))
+        for q, name, kind, point, other, rate in _seals(pair, parts, qs):
+            nodes[m + q * points_per_period]["seals"].append((name, kind, point, other - q,
+                                                              rate))
     return _assemble(pair, psis[0], points_per_period, nodes)
 
 
@@ -134,14 +138,25 @@ def _seals(pair, parts, qs):
             n = pair.gearing.lobes_male if rotor == MALE else pair.gearing.lobes_female
             leading = (k == (p.groove + 1) % n) if rotor == MALE else (k == p.groove)
             name = f"tip-{'male' if rotor == MALE else 'female'}-{'lead' if leading else 'trail'}"
-            out.append((q, name, "tip", pt, q2))
+            # A tip turns with its rotor: d point / d psi = speed ratio x J (point - axis).
+            axis = np.array([0.0, 0.0]) if rotor == MALE else pair.gearing.female_axis
+            w = 1.0 if rotor == MALE else -pair.gearing.lobes_male / pair.gearing.lobes_female
+            rel = pt - axis
+            out.append((q, name, "tip", pt, q2, w * np.array([-rel[1], rel[0]])))
     tol = SAME_POINT * pair.gearing.centre_distance
-    contacts = [(p, q, c) for p, q in zip(parts, qs, strict=True) for c in p.contacts]
-    for i, (_, q, c) in enumerate(contacts):
-        for j, (_, q2, c2) in enumerate(contacts):
+    contacts = [(q, c, r) for p, q in zip(parts, qs, strict=True)
+                for c, r in zip(p.contacts, p.contact_rates, strict=True)]
+    booked = set()
+    for i, (q, c, r) in enumerate(contacts):
+        for j, (q2, c2, _) in enumerate(contacts):
             if j != i and q2 != q and np.linalg.norm(c - c2) < tol:
-                out.append((q, "interlobe-lead" if q2 > q else "interlobe-trail",
-                            "interlobe", c, q2))
+                # A chamber whose parts meet the contact more than once (its male and
+                # female part both end there) has one sealing point there, not two.
+                key = (q, q2, round(c[0] / tol), round(c[1] / tol))
+                if key not in booked:
+                    booked.add(key)
+                    out.append((q, "interlobe-lead" if q2 > q else "interlobe-trail",
+                                "interlobe", c, q2, r))
                 break
     return out
 
@@ -174,20 +189,22 @@ def _assemble(pair, psi0, ppp, nodes) -> SectionChamber:
 def _tracks(seals_per_node, n) -> tuple[Track, ...]:
     """One Track per sealing-point name (a second point of one name at one node, such
     as a second interlobe contact, gets a name of its own: ``name#2``)."""
-    by_name = defaultdict(lambda: (np.zeros((n, 2)), np.zeros(n, bool), np.zeros(n, int)))
+    by_name = defaultdict(lambda: (np.zeros((n, 2)), np.zeros(n, bool), np.zeros(n, int),
+                                   np.zeros((n, 2))))
     kinds = {}
     for i, seals in enumerate(seals_per_node):
         count = defaultdict(int)
-        for name, kind, point, offset in sorted(seals, key=lambda s: (s[0], s[2][1])):
+        for name, kind, point, offset, rate in sorted(seals, key=lambda s: (s[0], s[2][1])):
             count[name] += 1
             key = name if count[name] == 1 else f"{name}#{count[name]}"
-            pts, present, off = by_name[key]
-            pts[i], present[i], off[i] = point, True, offset
+            pts, present, off, rates = by_name[key]
+            pts[i], present[i], off[i], rates[i] = point, True, offset, rate
             kinds[key] = kind
     out = []
     for name in sorted(by_name):
-        pts, present, off = by_name[name]
-        out.append(Track(name, kinds[name], *_fill(pts, present), off, _ids(pts, present)))
+        pts, present, off, rates = by_name[name]
+        out.append(Track(name, kinds[name], *_fill(pts, present), off, _ids(pts, present),
+                         rates=rates))
     return tuple(out)
 
 
@@ -209,11 +226,26 @@ def _ids(pts, present):
 
 
 def chamber_polygons(pair, phi: float, contacts: list | None = None) -> list[np.ndarray]:
-    """Chamber 0's section at male angle ``phi`` (fixed frame, metres)."""
+    """Chamber 0's section at male angle ``phi`` (fixed frame, metres).
+
+    The section one period on is the same section with every chamber one period older:
+    chamber 0 at ``phi`` is chamber q at ``phi - q period``.  So every angle is cut at
+    its residue in one period (ports ask for hundreds of ages, a few dozen residues).
+    """
+    period = TWO_PI / pair.gearing.lobes_male
+    base = -_beta0(pair)
+    q = int(np.floor((phi - base) / period + RESIDUE_TOL))
+    residue = float(phi - q * period)
+    key = round(residue / RESIDUE_TOL)
+    cuts = pair.cut_memo
+    if key not in cuts:
+        if len(cuts) >= CUT_MEMO:
+            cuts.pop(next(iter(cuts)))
+        cuts[key] = pair.cutter.cut(residue)
     shift = pair.female_shift
     out = []
-    for p in pair.cutter.cut(float(phi)):
-        if chamber_index(pair, p, float(phi), shift) == 0:
+    for p in cuts[key]:
+        if chamber_index(pair, p, residue, shift) == q:
             out.extend(p.polygons)
             if contacts is not None:
                 contacts.extend(p.contacts)

@@ -52,7 +52,8 @@ def _offscreen():
 
 
 def _surfaces(case, wrap_outer_deg: float) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Flank points (nz, nu, 3) and axis of each rotor, outer first."""
+    """Flank points (nz, nu, 3) and axis of each rotor, the reference rotor first
+    (``wrap_outer_deg``: the reference rotor's wrap)."""
     from rotorflow.geometry.curves import sample
     from rotorflow.geometry.export.surface import SweptSurface
     from rotorflow.geometry.sweep import Sweep
@@ -123,6 +124,11 @@ def render_case(case, folder: Path, wrap_outer_deg: float) -> list[Path]:
     """Write rotors.png and section.png for ``case`` into ``folder``; their paths."""
     pv = _offscreen()
     folder = Path(folder)
+    if all(r.material_inside for r in case.pair.rotors):
+        from .render_external import render_external
+
+        return render_external(pv, case, _surfaces(case, wrap_outer_deg), folder,
+                               wrap_outer_deg)
     outer, inner = _surfaces(case, wrap_outer_deg)
     files = [_rotors_picture(pv, case, outer, inner, wrap_outer_deg, folder / "rotors.png"),
              _section_picture(pv, case, outer, inner, folder / "section.png")]

@@ -99,7 +99,8 @@ def run_render(ctx: StageContext) -> dict:
     from rotorflow.postprocess.render import render_case
 
     figures = json.loads((ctx.input("geometry") / "geometry.json").read_text())
-    files = render_case(ctx.case, ctx.out, wrap_outer_deg=figures["wrap_outer_deg"])
+    reference = ctx.case.pair.rotors[0].name
+    files = render_case(ctx.case, ctx.out, wrap_outer_deg=figures[f"wrap_{reference}_deg"])
     return {"images": [p.name for p in files]}
 
 

@@ -253,4 +253,30 @@ def chamber_polygons(pair, phi: float, contacts: list | None = None) -> list[np.
 
 
 def contact_table(pair, step_deg: float = 1.0, span_deg: float | None = None):
-    raise CaseError("the twin-screw contact table is not built yet")
+    """Every interlobe contact of the pair every ``step_deg`` of male angle over
+    ``span_deg`` (default: one lobe period, after which the pattern repeats), as a
+    :class:`..contacts.ContactTable` (kind "interlobe"; ``space`` the male groove whose
+    part it bounds; radii from the male and the female axis)."""
+    from ..contacts import ContactTable
+
+    period = 360.0 / pair.gearing.lobes_male
+    span = period if span_deg is None else span_deg
+    if not step_deg > 0.0 or not span > 0.0:
+        raise CaseError("contact table step and span must be positive")
+    angles = np.arange(0.0, span + 0.5 * step_deg, step_deg)
+    if span_deg is None:
+        angles = angles[angles < span - 1e-9]
+    rows = []
+    tol = SAME_POINT * pair.gearing.centre_distance
+    for a in angles:
+        seen = []
+        for p in pair.cutter.cut(float(np.radians(a))):
+            for c in p.contacts:
+                if any(np.linalg.norm(c - d) < tol for d in seen):
+                    continue
+                seen.append(c)
+                rows.append((a, "interlobe", p.groove if p.rotor == MALE else -1 - p.groove,
+                             c[0], c[1], float(np.linalg.norm(c)),
+                             float(np.linalg.norm(c - pair.gearing.female_axis))))
+    cols = list(zip(*rows, strict=True)) if rows else [[]] * 7
+    return ContactTable(*(np.array(c) for c in cols))

@@ -12,6 +12,9 @@ Definitions (per lobe period = one chamber's cycle, t_P = period / omega_outer):
     adiabatic_efficiency        mass flow * isentropic work (p_suc, T_suc -> p_dis) / power
     isothermal_efficiency       mass flow * isothermal work at T_suc / power
     discharge_temperature_K     temperature of the delivered gas at its mean enthalpy
+    discharge_mixture_temperature_K  (oil injected) the delivered gas and oil mixed to one
+                                temperature (what a thermometer in the discharge line of an
+                                oil-flooded machine reads); None without oil
     leakage_kg_s                gross flow (|mdot| integrated) per report key of the
                                 chamber table's leakage paths (a path's name unless it
                                 declares a key); the internal gear's: "interlobe" (every
@@ -57,6 +60,7 @@ def figures(sol: CycleSolution) -> dict:
         "adiabatic_efficiency": ratio(mdot * w_is, power),
         "isothermal_efficiency": ratio(mdot * w_it, power),
         "discharge_temperature_K": T_dis,
+        "discharge_mixture_temperature_K": _mixture_T(model, a, T_dis),
         "heat_to_gas_W": float(a[ACC_Q] / t_period),
         "oil_flow_kg_s": float(a[model.acc_cols.oil_m_in] / t_period),
         "leakage_kg_s": {key: float(a[model.acc_cols.leak(key)] / t_period)
@@ -75,3 +79,18 @@ def figures(sol: CycleSolution) -> dict:
     if not sol.converged:
         out["message"] = sol.message
     return out
+
+
+def _mixture_T(model, a, T_gas):
+    """Delivered gas (at T_gas, cp from the fluid) and oil (its delivered enthalpy,
+    c_oil T) brought to one temperature by their heat balance."""
+    op, c = model.op, model.acc_cols
+    if not model.oil or T_gas is None or a[c.oil_m_out] <= 0 or a[ACC_M_DIS] <= 0:
+        return None
+    fl = model.fluid
+    h_lo = fl.state_pT(op.p_discharge_Pa, T_gas - 0.5)[2]
+    h_hi = fl.state_pT(op.p_discharge_Pa, T_gas + 0.5)[2]
+    cg = float(h_hi - h_lo) * a[ACC_M_DIS]
+    co = op.oil_cp_J_kgK * a[c.oil_m_out]
+    T_oil = a[c.oil_h_out] / co
+    return float((cg * T_gas + co * T_oil) / (cg + co))

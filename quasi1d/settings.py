@@ -136,8 +136,9 @@ class Operating:
     oil_mass_ratio: float = 0.0  # injected oil mass per trapped gas mass; 0: no oil
     T_oil_K: float | None = None  # None: equal to T_suction_K
     oil_cp_J_kgK: float = 1900.0  # typical mineral compressor oil
-    # Time constant of gas-oil heat exchange; 1 ms is that of ~50 um droplets
-    # (tau = rho_oil c_oil d / (6 h) with h ~ 1e3 W/(m2 K)).
+    # Time constant of gas-oil heat exchange, tau = rho_oil c_oil d / (6 h): 1 ms is that
+    # of ~13 um droplets in still gas (h = 2 k / d, Nu = 2), or of 50 um ones with
+    # h ~ 1.4e4 W/(m2 K) (a spray); 50 um droplets in still gas take 14 ms.
     oil_time_constant_s: float = 1.0e-3
 
     KEYS = (

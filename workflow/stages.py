@@ -209,7 +209,11 @@ def _has_export(raw: dict) -> str | None:
     return None if "export" in raw else "it has no [export] section"
 
 
-GEOMETRY_READS = ("machine", "sweep", "operating.volume_ratio", "operating.driven")
+# The port timing keys: a family whose table carries its port areas (the twin screw)
+# cuts the ports where the case opens and closes them.
+GEOMETRY_READS = ("machine", "sweep", "operating.volume_ratio", "operating.driven",
+                  "operating.discharge_early_opening_deg", "operating.suction_close_deg",
+                  "operating.discharge_open_deg")
 _IMPL = "rotorflow.workflow.builtin"
 _REPORT = "rotorflow.postprocess.report"
 

@@ -264,6 +264,9 @@ def sweep_report(folder: Path, title: str, params: list[str], axes: list[str],
             f"{len(failed)} failed.</p>"]
     figs = []
     plt = _pyplot()
+    # An axis that holds one value over the whole sweep (a setting shared by every point)
+    # is no axis of a figure.
+    axes = [a for a in axes if len({str(r.get(a)) for r in rows}) > 1] or axes
     for key, label in SWEEP_FIGURES:
         pts = [r for r in ok if _num(r.get(key)) is not None]
         if not pts:
@@ -290,6 +293,10 @@ def sweep_report(folder: Path, title: str, params: list[str], axes: list[str],
     return path
 
 
+#: A two-axis sweep with at most this many values on its second axis is drawn as curves.
+SWEEP_LINES = 8
+
+
 def _num(v):
     try:
         x = float(v)
@@ -301,7 +308,20 @@ def _num(v):
 def _sweep_plot(plt, path, params, pts, failed, key, label):
     fig, ax = plt.subplots(figsize=FIGSIZE)
     val = np.array([_num(r[key]) for r in pts])
-    if len(params) == 2:
+    groups = sorted({_num(r[params[1]]) for r in pts}, key=lambda v: (v is None, v or 0.0)) \
+        if len(params) == 2 else []
+    if len(params) == 2 and len(groups) <= SWEEP_LINES and None not in groups:
+        # Few values of the second axis: one curve per value against the first (a
+        # designer's figure, e.g. efficiency against port angle at three speeds).
+        for g in groups:
+            sel = [r for r in pts if _num(r[params[1]]) == g]
+            sel.sort(key=lambda r: _num(r[params[0]]))
+            ax.plot([_num(r[params[0]]) for r in sel], [_num(r[key]) for r in sel], "o-",
+                    label=f"{params[1]} = {g:g}")
+        ax.set_xlabel(params[0])
+        ax.set_ylabel(label)
+        ax.legend(fontsize=8)
+    elif len(params) == 2:
         x = np.array([_num(r[params[0]]) for r in pts], dtype=float)
         y = np.array([_num(r[params[1]]) for r in pts], dtype=float)
         sc = ax.scatter(x, y, c=val, s=60, cmap="viridis")

@@ -38,8 +38,15 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
     n_dr = pair.rotor(split.driven).lobes
     phi = cur.phi
     k_max = int(np.argmax(cur.volume))
-    suction_close = phi[np.nonzero(cur.area_lp > 0.0)[0][-1]]
-    discharge_open = phi[np.nonzero(cur.area_hp > 0.0)[0][0]]
+    if getattr(pair, "port_areas", False):
+        # The chamber meets the end plates long before and after its ports (a twin-screw
+        # groove reaches the discharge plate while still filling): the port timing.
+        timing = _timing(case, m)
+        suction_close = phi[0] + timing.suction_close
+        discharge_open = phi[0] + timing.discharge_open
+    else:
+        suction_close = phi[np.nonzero(cur.area_lp > 0.0)[0][-1]]
+        discharge_open = phi[np.nonzero(cur.area_hp > 0.0)[0][0]]
     wraps = {f"wrap_{r.name}_deg": _deg(m.sweep.wrap * abs(r.speed_ratio)) for r in pair.rotors}
     return {
         "case": case.name,
@@ -116,16 +123,21 @@ def _port_areas(case, m: SweptMachine):
     """The areas open to the ports against age, for a family whose chamber meets an end
     plate long before the port (the twin screw's grooves reach the discharge plate
     while still filling): its face section inside the port, not the whole section."""
-    from .ports import open_areas, port_timing
+    from .ports import open_areas
+
+    cur = m.curves
+    return open_areas(m, _timing(case, m), cur.phi - cur.phi[0])
+
+
+def _timing(case, m: SweptMachine):
+    """The case's port timing (volume ratio, early opening, or explicit angles)."""
+    from .ports import port_timing
 
     op = case.raw.get("operating", {})
     early = math.radians(float(op.get("discharge_early_opening_deg", 0.0)))
     sc, do = op.get("suction_close_deg"), op.get("discharge_open_deg")
-    timing = port_timing(m, case.volume_ratio,
-                         None if sc is None else math.radians(sc),
-                         None if do is None else math.radians(do), early)
-    cur = m.curves
-    return open_areas(m, timing, cur.phi - cur.phi[0])
+    return port_timing(m, case.volume_ratio, None if sc is None else math.radians(sc),
+                       None if do is None else math.radians(do), early)
 
 
 def _rotor_loads(m: SweptMachine) -> tuple[dict, dict]:

@@ -32,6 +32,12 @@ def test_geometry_of_the_4_6_machine():
     whole = (fig["groove_area_male_mm2"] + fig["groove_area_female_mm2"]) * 1e-6 * 0.130
     assert 0.5 * whole < fig["chamber_volume_max_m3"] < whole
     assert fig["swept_volume_m3"] == pytest.approx(4 * fig["chamber_volume_max_m3"])
+    # Seed 004: the suction port closes at the largest volume; the discharge port opens
+    # where the volume has fallen by the built-in ratio, 7 deg early (the case's keys).
+    assert fig["angle_suction_close_deg"] == pytest.approx(fig["angle_volume_max_deg"])
+    assert fig["volume_suction_close_m3"] == pytest.approx(fig["chamber_volume_max_m3"],
+                                                           rel=1e-3)
+    assert fig["angle_discharge_open_deg"] > fig["angle_suction_close_deg"]
 
 
 BAD = {

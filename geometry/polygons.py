@@ -94,3 +94,26 @@ def check_simple(poly, what: str) -> None:
 
 def signed_area(poly: np.ndarray) -> float:
     return 0.5 * float(np.sum(cross(poly, np.roll(poly, -1, axis=0))))
+
+
+#: Nearest vertices among which point_gap looks for the closest segment: enough when no
+#: edge is longer than the distances measured (callers sample with a short max step).
+GAP_NEAREST = 16
+
+
+def polygon_gap(points, poly, nearest: int = GAP_NEAREST):
+    """Signed distance of each point to the closed polygon (negative inside), by
+    point-to-segment distances and an even-odd inside test: no curve, no Newton, so the
+    sign stays right next to a sharp corner (where a sign taken from a curve's normal is
+    ambiguous).  The closest segment must have a vertex among the ``nearest`` vertices
+    closest to the point (edges short against the distances measured)."""
+    from matplotlib.path import Path
+    from scipy.spatial import cKDTree
+
+    _, k = cKDTree(poly).query(points, nearest)
+    idx = np.concatenate([k, k - 1], axis=1) % len(poly)
+    a, b = poly[idx], poly[(idx + 1) % len(poly)]
+    ab, ap = b - a, points[:, None, :] - a
+    t = np.clip(np.sum(ap * ab, -1) / np.sum(ab * ab, -1), 0.0, 1.0)
+    d = np.linalg.norm(ap - t[..., None] * ab, axis=-1).min(axis=1)
+    return np.where(Path(poly).contains_points(points), -d, d)

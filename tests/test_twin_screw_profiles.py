@@ -10,13 +10,12 @@ import math
 
 import numpy as np
 import pytest
-from matplotlib.path import Path
 from scipy.spatial import cKDTree
 
 from rotorflow.errors import CaseError
 from rotorflow.geometry.curves import closest, sample, sample_polygon
 from rotorflow.geometry.planar import cross, rotate
-from rotorflow.geometry.polygons import signed_area
+from rotorflow.geometry.polygons import polygon_gap, signed_area
 from rotorflow.geometry.twin_screw import (
     CircleArc,
     EllipseArc,
@@ -116,20 +115,6 @@ def polygon(curve):
     return curve.point(samples(curve))
 
 
-def polygon_gap(points, poly):
-    """Signed distance of each point to the closed polygon (negative inside), by
-    point-to-segment distances and an even-odd inside test: no curve, no Newton.  The
-    nearest segment has a vertex among the NEAREST closest vertices (edges are short)."""
-    _, k = cKDTree(poly).query(points, NEAREST)
-    idx = np.concatenate([k, k - 1], axis=1) % len(poly)
-    a, b = poly[idx], poly[(idx + 1) % len(poly)]
-    ab, ap = b - a, points[:, None, :] - a
-    t = np.clip(np.sum(ap * ab, -1) / np.sum(ab * ab, -1), 0.0, 1.0)
-    d = np.linalg.norm(ap - t[..., None] * ab, axis=-1).min(axis=1)
-    inside = Path(poly).contains_points(points)
-    return np.where(inside, -d, d)
-
-
 def turned(g, male_poly, female_poly, theta):
     """Both polygons in the fixed frame at male angle theta; the female turns the other
     way by the lobe ratio N1/N2 (not by the gearing's pitch radii)."""
@@ -167,7 +152,8 @@ def smallest_gaps(g, male, female, angles=60):
         m, f = turned(g, pm, pf, theta)
         near = np.linalg.norm(m - [g.centre_distance, 0.0], axis=1) < reach
         local = np.linalg.norm(f, axis=1) < np.linalg.norm(m, axis=1).max() + 1e-4
-        gaps.append(min(polygon_gap(m[near], f).min(), polygon_gap(f[local], m).min()))
+        gaps.append(min(polygon_gap(m[near], f, NEAREST).min(),
+                           polygon_gap(f[local], m, NEAREST).min()))
     return np.array(gaps)
 
 
@@ -211,7 +197,7 @@ def contact(g, male, female, theta, um):
     near = np.linalg.norm(pm - [g.centre_distance, 0.0], axis=1) < female.radius_max + 1e-4
     pf = rotate(polygon(female), -theta * g.lobes_male / g.lobes_female) + [
         g.centre_distance, 0.0]
-    u = um[near][int(np.argmin(polygon_gap(pm[near], pf)))]
+    u = um[near][int(np.argmin(polygon_gap(pm[near], pf, NEAREST)))]
     h = float(np.max(np.diff(um)))
     for _ in range(3):
         fine = u + np.linspace(-2 * h, 2 * h, 81)

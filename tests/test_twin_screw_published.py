@@ -11,13 +11,12 @@ import math
 
 import numpy as np
 import pytest
-from matplotlib.path import Path
 from scipy.spatial import cKDTree
 
 from rotorflow.errors import CaseError
 from rotorflow.geometry.curves import sample
 from rotorflow.geometry.planar import cross, rotate
-from rotorflow.geometry.polygons import signed_area
+from rotorflow.geometry.polygons import polygon_gap, signed_area
 from rotorflow.geometry.twin_screw import Gearing, symmetric_circular_pair
 from rotorflow.geometry.twin_screw.pin_cycloid import (
     pin_cycloid_from_diameters,
@@ -71,17 +70,6 @@ def polygon(curve):
     return curve.point(sample(curve, POLY_TOL, max_step=MAX_EDGE))
 
 
-def polygon_gap(points, poly):
-    """Signed distance of each point to the closed polygon (negative inside)."""
-    _, k = cKDTree(poly).query(points, NEAREST)
-    idx = np.concatenate([k, k - 1], axis=1) % len(poly)
-    a, b = poly[idx], poly[(idx + 1) % len(poly)]
-    ab, ap = b - a, points[:, None, :] - a
-    t = np.clip(np.sum(ap * ab, -1) / np.sum(ab * ab, -1), 0.0, 1.0)
-    d = np.linalg.norm(ap - t[..., None] * ab, axis=-1).min(axis=1)
-    return np.where(Path(poly).contains_points(points), -d, d)
-
-
 def smallest_gaps(g, male, female, angles=60):
     """Smallest signed distance between the turned polygons (either way), at male
     angles over one male lobe; the female turns the other way by N1/N2."""
@@ -93,7 +81,8 @@ def smallest_gaps(g, male, female, angles=60):
         f = rotate(pf, -theta * g.lobes_male / g.lobes_female) + axis
         near = np.linalg.norm(m - axis, axis=1) < np.linalg.norm(pf, axis=1).max() + 1e-4
         local = np.linalg.norm(f, axis=1) < np.linalg.norm(pm, axis=1).max() + 1e-4
-        out.append(min(polygon_gap(m[near], f).min(), polygon_gap(f[local], m).min()))
+        out.append(min(polygon_gap(m[near], f, NEAREST).min(),
+                           polygon_gap(f[local], m, NEAREST).min()))
     return np.array(out)
 
 

@@ -44,8 +44,6 @@ class _Run:
     b: object
     first: int  # rotor-polygon index of its first and last vertex (-1: none)
     last: int
-    contact_start: bool = False
-    contact_end: bool = False
 
 
 def _key(x, scale):
@@ -215,7 +213,7 @@ class Boundaries:
                     gap = np.diff(np.append(idx, idx[0] + m))
                     j = int(np.argmax(gap))  # the lens's male arc is the complement
                     lo, hi = idx[(j + 1) % len(idx)], idx[j]
-                    c = self.pair.contact_between(rd.u, lo, hi, m, psi)
+                    c = self.pair.contact_between(rd.u, lo, hi, psi)
                 else:
                     c = self.pair.contact_near(ends.mean(0), psi)
                 for e in ends:
@@ -226,7 +224,6 @@ class Boundaries:
             for which in ("a", "b"):
                 end = getattr(q, which)
                 if isinstance(end, tuple):
-                    setattr(q, "contact_start" if which == "a" else "contact_end", True)
                     # The fluid's corner is the lens's end up to Clipper's separate
                     # rounding of the two Booleans (and, along a conformal band, the
                     # chords' crossings): the nearest lens end within LENS_MATCH.
@@ -243,32 +240,6 @@ class Boundaries:
 
     def _female_distance(self, pts, psi):
         return self._rotor_data[FEMALE].tree.query(self.to_rotor(FEMALE, pts, psi))[0]
-
-    def _close_chains(self, psi) -> None:
-        """Make each rotor's wetted arcs meet end to start across every contact.
-
-        The fluid runs along a rotor clockwise; after a run that ends at a contact the
-        next run (the next start lower along the profile) must begin at that same
-        point, or the arc between them would be wetted by nobody (a sub-micron pocket
-        inside a lens whose two ends found different contacts).  The next run's start
-        takes the end's point; both are contacts of one lens.
-        """
-        for r in (MALE, FEMALE):
-            runs = [q for q in self._runs if q.rotor == r]
-            rd = self._rotor_data[r]
-            m = len(rd.polygon)
-            if len(runs) < 2:
-                continue
-            a_idx = np.array([rd.tree.query(self.to_rotor(r, q.a, psi))[1] for q in runs])
-            for q in runs:
-                if not q.contact_end:
-                    continue
-                b = rd.tree.query(self.to_rotor(r, q.b, psi))[1]
-                below = (b - a_idx) % m
-                j = int(np.argmin(np.where(below == 0, m, below) if False else below))
-                nxt = runs[j]
-                if nxt is not q and nxt.contact_start:
-                    nxt.a = q.b
 
     def _loads(self) -> None:
         for q in self._runs:

@@ -145,57 +145,58 @@ class TwinScrewPair(RotorPair):
         return math.atan2(p[1], p[0])
 
     # ------------------------------------------------------------ contacts
-    def contact_near(self, x, psi: float) -> np.ndarray:
-        """The contact point of the rotors near ``x`` at male angle ``psi`` (fixed frame).
+    def _law(self, u, psi: float):
+        """The law of gearing on the male at parameters u, male angle psi: the cross
+        product of the normal with the way to the pitch point (zero at a contact)."""
+        male = self.male
+        u = np.mod(np.atleast_1d(u), male.n)
+        pitch = rotate(self.gearing.pitch_point[None, :], -psi)[0]
+        return cross(male.normal(u), pitch - male.point(u))
+
+    def _root(self, lo: float, hi: float, near: float, psi: float) -> float | None:
+        """The root of the law in [lo, hi] nearest ``near`` (None if it has none)."""
+        grid = np.linspace(lo, hi, CONTACT_GRID)
+        vals = self._law(grid, psi)
+        sign = np.nonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[0]
+        if not len(sign):
+            return None
+        j = int(sign[np.argmin(np.abs(grid[sign] - near))])
+        law = lambda u: self._law(u, psi)  # noqa: E731
+        return float(np.mod(_illinois(law, grid[j], grid[j + 1], vals[j], vals[j + 1]),
+                            self.male.n))
+
+    def contact_near(self, x, psi: float) -> tuple[np.ndarray, np.ndarray]:
+        """(point, d point / d psi) of the contact of the rotors near ``x`` at male
+        angle ``psi`` (fixed frame).
 
         At a contact the male's normal passes through the pitch point (the law of
         gearing), which holds for every conjugate arc whatever generated it; the root
         is sought on the male profile around the sampled point nearest ``x``.
         """
-        male = self.male
         local = rotate(np.asarray(x, dtype=float)[None, :], -psi)[0]
         u_grid, p_grid = self._foot_grid
         u0 = float(u_grid[int(np.argmin(np.linalg.norm(p_grid - local, axis=-1)))])
-        pitch = rotate(self.gearing.pitch_point[None, :], -psi)[0]
-
-        def law(u):
-            u = np.atleast_1d(u)
-            return cross(male.normal(u), pitch - male.point(u))
-
-        grid = np.linspace(u0 - CONTACT_WINDOW, u0 + CONTACT_WINDOW, CONTACT_GRID)
-        vals = law(grid)
-        sign = np.nonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[0]
-        if not len(sign):
+        u = self._root(u0 - CONTACT_WINDOW, u0 + CONTACT_WINDOW, u0, psi)
+        if u is None:
             # No contact here: keep the polygon's corner, moving with neither rotor.
             return np.asarray(x, dtype=float), np.zeros(2)
-        j = int(sign[np.argmin(np.abs(grid[sign] - u0))])
-        u = _illinois(law, grid[j], grid[j + 1], vals[j], vals[j + 1])
         return self._contact_at(u, psi)
 
-    def contact_between(self, u_poly, lo: int, hi: int, m: int, psi: float) -> np.ndarray:
-        """The contact point on the male between polygon vertices ``lo`` and ``hi``
-        (indices into ``u_poly``, a closed polygon of ``m`` vertices, running up from
-        lo to hi): the root of the law of gearing nearest the middle (fixed frame)."""
+    def contact_between(self, u_poly, lo: int, hi: int, psi: float
+                        ) -> tuple[np.ndarray, np.ndarray]:
+        """(point, d point / d psi) of the contact on the male between polygon vertices
+        ``lo`` and ``hi`` (indices into ``u_poly``, running up from lo to hi, around the
+        closed profile): the root of the law of gearing nearest the middle."""
         male = self.male
         ulo = float(u_poly[lo])
         uhi = float(u_poly[hi]) + (male.n if hi < lo else 0.0)
-        pitch = rotate(self.gearing.pitch_point[None, :], -psi)[0]
-
-        def law(u):
-            u = np.mod(np.atleast_1d(u), male.n)
-            return cross(male.normal(u), pitch - male.point(u))
-
-        grid = np.linspace(ulo, uhi, CONTACT_GRID)
-        vals = law(grid)
-        sign = np.nonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[0]
         mid = 0.5 * (ulo + uhi)
-        if not len(sign):
+        u = self._root(ulo, uhi, mid, psi)
+        if u is None:
             # No root in the lens (a conformal band at its tangency): its middle, with
             # no rate of its own (the band is not a sealing point that moves).
             return rotate(male.point(np.array([np.mod(mid, male.n)])), psi)[0], np.zeros(2)
-        j = int(sign[np.argmin(np.abs(grid[sign] - mid))])
-        u = _illinois(law, grid[j], grid[j + 1], vals[j], vals[j + 1])
-        return self._contact_at(float(np.mod(u, male.n)), psi)
+        return self._contact_at(u, psi)
 
     def _contact_at(self, u: float, psi: float):
         """(point, d point / d psi) of the contact at male parameter u, fixed frame.
@@ -211,9 +212,7 @@ class TwinScrewPair(RotorPair):
         pitch = rotate(self.gearing.pitch_point[None, :], -psi)[0]
         dpitch = np.array([pitch[1], -pitch[0]])  # d/dpsi of R(-psi) P
         h = LAW_STEP
-        up, um = np.array([u + h]), np.array([u - h])
-        law_u = (cross(male.normal(up), pitch - male.point(up))[0]
-                 - cross(male.normal(um), pitch - male.point(um))[0]) / (2.0 * h)
+        law_u = float(self._law(u + h, psi)[0] - self._law(u - h, psi)[0]) / (2.0 * h)
         law_psi = float(cross(n, dpitch))
         du = -law_psi / law_u if law_u != 0.0 else 0.0
         point = rotate(p[None, :], psi)[0]

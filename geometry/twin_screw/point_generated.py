@@ -26,13 +26,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from matplotlib.path import Path
-from scipy.spatial import cKDTree
 
 from rotorflow.errors import CaseError
 
 from ..curves import sample
 from ..planar import TWO_PI, rotate
+from ..polygons import polygon_gap
 from .meshing import Gearing
 from .profiles import CHECK_ANGLES, CHECK_TOL, OVERLAP_TOL
 
@@ -118,21 +117,6 @@ NEAREST = 16
 MAX_EDGE = 2.5e-3
 
 
-def polygon_gap(points, poly):
-    """Signed distance of each point to the closed polygon (negative inside): point to
-    segment distances and an even-odd inside test, no foot-point iteration.  Unlike a
-    sign taken from a curve normal, this stays right next to a sharp corner, which
-    point-generated profiles have (a lobe tip, a flank meeting the pitch circle)."""
-    _, k = cKDTree(poly).query(points, NEAREST)
-    idx = np.concatenate([k, k - 1], axis=1) % len(poly)
-    a, b = poly[idx], poly[(idx + 1) % len(poly)]
-    ab, ap = b - a, points[:, None, :] - a
-    t = np.clip(np.sum(ap * ab, -1) / np.sum(ab * ab, -1), 0.0, 1.0)
-    d = np.linalg.norm(ap - t[..., None] * ab, axis=-1).min(axis=1)
-    inside = Path(poly).contains_points(points)
-    return np.where(inside, -d, d)
-
-
 def check_no_overlap(male, female, gearing: Gearing) -> None:
     """Raise CaseError at the first male angle (of CHECK_ANGLES over one male lobe)
     where either polygon (chordal tolerance CHECK_TOL) enters the other by more than
@@ -148,7 +132,7 @@ def check_no_overlap(male, female, gearing: Gearing) -> None:
         f = rotate(pf, -theta * gearing.r1 / gearing.r2) + gearing.female_axis
         near = np.linalg.norm(m - gearing.female_axis, axis=-1) <= female.radius_max + allowed
         local = np.linalg.norm(f, axis=-1) <= male.radius_max + allowed
-        gm, gf = polygon_gap(m[near], f), polygon_gap(f[local], m)
+        gm, gf = polygon_gap(m[near], f, NEAREST), polygon_gap(f[local], m, NEAREST)
         if min(gm.min(initial=np.inf), gf.min(initial=np.inf)) < -allowed:
             i = int(np.argmin(gm)) if gm.size else 0
             raise CaseError(f"interference: at male angle {np.degrees(theta):.3f} deg the "

@@ -217,7 +217,6 @@ class SectionCutter(Boundaries):
                         part.piece = number
                         parts.append(part)
         self._contacts(psi, (polys[0] ^ polys[1]).decompose())
-        self._close_chains(psi)
         self._loads()
         for part in parts:
             if part.centroid is not None:

@@ -110,10 +110,12 @@ class RotorPair(ABC):
 
     @abstractmethod
     def leakage_paths(self, far_lines: dict[int, np.ndarray],
-                      track_lines: dict | None = None) -> tuple:
+                      track_lines: dict | None = None,
+                      opening_areas: dict | None = None) -> tuple:
         """The chamber table's leakage paths (:class:`~.table.LeakagePath`), given the
-        sealing lines to chambers two or more periods away that the sweep found, and
-        the lines of the section's further tracks, keyed (track name, offset)."""
+        sealing lines to chambers two or more periods away that the sweep found, the
+        lines of the section's further tracks and the areas of its openings, both keyed
+        (name, offset)."""
 
     def swept_figures(self, machine) -> dict:
         """The family's own figures of the swept pair (none by default)."""

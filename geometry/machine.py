@@ -97,6 +97,19 @@ def _linear(section: SectionChamber, values: np.ndarray, x):
     return np.where(ok, out, 0.0)
 
 
+def _swept_width(opening, sweep, phi: float) -> float:
+    """``int_0^wrap w(phi - theta) g(theta) d theta`` (:attr:`SweptMachine.opening_areas`)."""
+    bp = opening.breakpoints(phi - sweep.wrap, phi)
+    if len(bp) < 2:
+        return 0.0
+    x, w = np.polynomial.legendre.leggauss(2)
+    mid, half = 0.5 * (bp[1:] + bp[:-1]), 0.5 * np.diff(bp)
+    psi = (mid[:, None] + half[:, None] * x[None, :]).ravel()
+    z = sweep.z_of_twist(phi - psi)
+    g = sweep.scale(z) / sweep.dtwist(z)
+    return float(np.sum(opening.at(psi) * g * (half[:, None] * w[None, :]).ravel()))
+
+
 def _symmetric(lines: dict[int, np.ndarray], per_period: int) -> dict[int, np.ndarray]:
     """Make the line to the chamber d periods older, at angle phi, equal to that
     chamber's line to this one, at phi + d periods (the same line): the larger view."""
@@ -266,6 +279,29 @@ class SweptMachine:
             for d, v in lines.items():
                 if d != 0:
                     out[(track.name, d)] = out.get((track.name, d), 0.0) + v
+        return out
+
+    @cached_property
+    def opening_areas(self) -> dict[tuple[str, int], np.ndarray]:
+        """Areas of the section's openings (:class:`.section.Opening`) over the chamber
+        curves' angles, keyed (name, offset): the width swept along the rotors,
+        ``A(phi) = int w(phi - twist(z)) s(z) dz``.
+
+        With theta = twist(z) this is ``int_0^wrap w(phi - theta) g(theta) d theta``,
+        g = s dz/d theta; the width is linear between its breakpoints, so two Gauss
+        nodes per piece integrate it exactly where g is constant (a constant lead) and
+        to the pieces' second order elsewhere.  A straight sweep has every section alike.
+        """
+        sw, phi = self.sweep, self.curves.phi
+        out: dict[tuple[str, int], np.ndarray] = {}
+        for o in self.section.openings:
+            key = (o.name, int(o.offset))
+            if sw.wrap == 0.0:
+                z, wz = sw.nodes()
+                area = o.at(phi) * float(wz @ sw.scale(z))
+            else:
+                area = np.array([_swept_width(o, sw, p) for p in phi])
+            out[key] = out.get(key, 0.0) + area
         return out
 
     def _line_lengths(self, pts, rate, offsets, present=None) -> dict[int, np.ndarray]:

@@ -18,6 +18,7 @@ node past the death, where the chamber is gone.  Per unit length and unit pressu
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,6 +42,39 @@ class Track:
     ids: np.ndarray  # (n,) int
     #: d point / d psi where the family knows it exactly (None: differences of points)
     rates: np.ndarray | None = None
+
+@dataclass(frozen=True)
+class Opening:
+    """An opening of the section chamber to the chamber ``offset`` periods away across a
+    cut of the section (a segment, not a point), present over the angle ``intervals``
+    (k, 2) with the width ``width(psi)`` there.  Swept along the rotors it is an
+    orifice area, the width integrated over the length (the twin screw's blow-hole in
+    the cusp plane).  The width is a function, not node values: the family knows it at
+    any angle, and interpolating across the jumps of an opening cut short by a passing
+    lobe would cost an order of convergence."""
+
+    name: str
+    offset: int
+    intervals: np.ndarray
+    width: Callable[[np.ndarray], np.ndarray]
+
+    def breakpoints(self, a: float, b: float) -> np.ndarray:
+        """Angles in [a, b] between which the width is linear: the width's own
+        (``width.breakpoints``) and the intervals' ends."""
+        ends = self.intervals.ravel()
+        pts = np.concatenate([[a, b], ends[(ends > a) & (ends < b)],
+                              self.width.breakpoints(a, b)])
+        return np.unique(pts)
+
+    def at(self, psi) -> np.ndarray:
+        psi = np.asarray(psi, dtype=float)
+        inside = np.zeros(psi.shape, bool)
+        for a, b in self.intervals:
+            inside |= (psi >= a) & (psi < b)
+        out = np.zeros(psi.shape)
+        out[inside] = self.width(psi[inside])
+        return out
+
 
 #: Default angle samples per lobe period of the section tables.
 POINTS_PER_PERIOD = 96
@@ -69,6 +103,8 @@ class SectionChamber:
     #: Further sealing points (:class:`Track`); the lead and trail contacts are always
     #: followed, these where ``present``.
     tracks: tuple = ()
+    #: Openings across cuts of the section (:class:`Opening`).
+    openings: tuple = ()
 
     def contact_rate(self, which: str | Track) -> np.ndarray:
         """d(contact point)/d(psi) of the leading or trailing contact, on the grid.

@@ -9,7 +9,7 @@ import numpy as np
 from .forces import power_split
 from .machine import SweptMachine
 from .section import POINTS_PER_PERIOD
-from .table import ChamberTable, track_column
+from .table import ChamberTable, opening_column, track_column
 
 
 def build_machine(case, points_per_period: int | None = None) -> SweptMachine:
@@ -91,6 +91,8 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     load_columns, rotor_scalars = _rotor_loads(m)
     tracks = m.track_lines
     load_columns.update({track_column(name, d): v for (name, d), v in tracks.items()})
+    openings = m.opening_areas
+    load_columns.update({opening_column(name, d): v for (name, d), v in openings.items()})
     load_columns.update(pair.face_columns(m))
     area_lp, area_hp = cur.area_lp, cur.area_hp
     if getattr(pair, "port_areas", False):
@@ -111,7 +113,7 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
         diameter_m=pair.diameter,
         seal_far=far,
         machine=pair.family,
-        leakage_paths=pair.leakage_paths(far, tracks),
+        leakage_paths=pair.leakage_paths(far, tracks, openings),
         columns=load_columns,
         rotor_names=tuple(r.name for r in pair.rotors),
         speed_ratios=tuple(float(r.speed_ratio) for r in pair.rotors),

@@ -177,6 +177,12 @@ def track_column(track: str, offset: int) -> str:
     return f"seal_{track.replace('#', '_')}{'+' if offset > 0 else '-'}{abs(offset)}_m"
 
 
+def opening_column(name: str, offset: int) -> str:
+    """Column name of a family's orifice (a section opening swept into an area, such as
+    the twin screw's blow-hole) to the chamber ``offset`` periods away."""
+    return f"area_{name}{'+' if offset > 0 else '-'}{abs(offset)}_m2"
+
+
 def internal_gear_paths(far_offsets: Iterable[int] = ()) -> tuple[LeakagePath, ...]:
     """The leakage paths of an internal-gear (pin-generated) machine's table: the
     sealing lines to the chambers one period older and younger (one line seen from both
@@ -366,4 +372,5 @@ def read(csv_path: Path) -> ChamberTable:
 
 
 __all__ = ["COLUMNS", "LEAKAGE_KINDS", "ChamberTable", "LeakagePath", "internal_gear_paths",
+           "opening_column",
            "read", "write", "asdict"]

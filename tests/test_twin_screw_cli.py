@@ -56,6 +56,8 @@ BAD = {
                         "unknown twin-screw profile"),
     "internal-gear key": (GOOD.replace("[machine]", "[machine]\nlambda = 1.4"), "lambda"),
     "driven rotor unknown": (GOOD.replace('driven = "male"', 'driven = "inner"'), "driven"),
+    "unknown blow-hole": (GOOD.replace("[machine]", '[machine]\nblow_hole = "sphere"'),
+                          "blow_hole"),
 }
 
 

@@ -370,7 +370,7 @@ class PinGerotor(RotorPair):
                      self.fillet_apex_diameter))
         return hashlib.sha256(text.encode()).hexdigest()[:8]
 
-    def leakage_paths(self, far_lines, track_lines=None) -> tuple:
+    def leakage_paths(self, far_lines, track_lines=None, opening_areas=None) -> tuple:
         """Interlobe lines to +-1 and every farther neighbour found, end faces to suction
         (low-pressure face) and discharge (high-pressure face)."""
         from ..table import internal_gear_paths

@@ -30,6 +30,10 @@ LENS_MATCH = 2e-3
 #: curved as its bore overlaps it over a lens of up to ~0.2 mm at C = 78 mm.
 TIP_MATCH = 5e-3
 
+#: A cut along the cusp line ending this near (per C) a cusp point starts there: the
+#: bores' polygons meet within a chord error (1e-6 C) of the true cusp.
+CUSP_POINT = 5e-5
+
 MALE, FEMALE, BORE_M, BORE_F, CUSP, NEW = 0, 1, 2, 3, 4, -1
 
 
@@ -131,6 +135,8 @@ class Boundaries:
                 part.area += float(np.sum(0.5 * rad * rad * (th - np.sin(th))))
                 del o
                 continue
+            if r == CUSP:
+                self._cusp_cut(v[i0], v[i1 % n], float(edges[i0:i1].sum()), part)
             if r not in (MALE, FEMALE):
                 continue
             before, after = int(lab[i0 - 1]), int(lab[i1 % n])
@@ -142,6 +148,15 @@ class Boundaries:
             self._runs.append(_Run(part, r, self._snap_tip(r, v[i0], before, psi, part),
                                    self._snap_tip(r, v[i1 % n], after, psi, part),
                                    int(k[0]) if len(k) else -1, int(k[-1]) if len(k) else -1))
+
+    def _cusp_cut(self, a, b, length, part) -> None:
+        """A run along the cusp line that starts or ends at a cusp point is the part's
+        opening across the cusp plane there (the blow-hole's section, :mod:`.blowhole`)."""
+        tol = CUSP_POINT * self.C
+        for y in (self.yc, -self.yc):
+            if min(abs(a[1] - y), abs(b[1] - y)) < tol:
+                part.cusp_cut += length
+                part.cusp_top = y > 0.0
 
     def _run_true(self, r, idx, chords):
         """(area to add to the polygon's, true length) of a run along rotor r whose

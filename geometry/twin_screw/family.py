@@ -10,10 +10,14 @@
   rack's depth on each side of the pitch line;
 * ``tip_radius_mm`` (optional): the rack's male-tip circle; by default the one that
   centres the female tip's circle on the pitch line (circular) or 0.9 of it
-  (line-circle, so that the straight flank exists).
+  (line-circle, so that the straight flank exists);
+* ``blow_hole`` (optional): the surface that spans the blow-hole (:mod:`.blowhole`),
+  "cusp-plane" (default) or "plane" (seed 004's plane through the contact line's end).
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 from rotorflow.errors import CaseError
 
@@ -24,7 +28,9 @@ from .meshing import Gearing
 from .pair import TwinScrewPair
 
 KEYS = frozenset({"profile", "lobes_male", "lobes_female", "centre_distance_mm",
-                  "male_diameter_mm", "female_diameter_mm", "tip_radius_mm"})
+                  "male_diameter_mm", "female_diameter_mm", "tip_radius_mm", "blow_hole"})
+#: How the blow-hole is spanned (:mod:`.blowhole`).
+BLOW_HOLES = ("cusp-plane", "plane")
 PROFILES = {"circular": symmetric_circular_pair, "line-circle": asymmetric_pair}
 #: The line-circle rack's default male-tip circle, per the centred one: 10 % smaller
 #: leaves room for the straight flank between the circles.
@@ -83,10 +89,15 @@ def from_section(m: dict, where: str) -> TwinScrewPair:
                         f"({d1 * 500:.4g} + {d2 * 500:.4g} mm) must exceed the centre "
                         f"distance ({c * 1e3:.4g} mm)")
     tip = number(m, "tip_radius_mm", where) * 1e-3 if "tip_radius_mm" in m else None
+    hole = m.get("blow_hole", BLOW_HOLES[0])
+    if hole not in BLOW_HOLES:
+        raise CaseError(f"blow_hole = {hole!r} in {where} is not one of "
+                        f"{', '.join(repr(b) for b in BLOW_HOLES)}")
     try:
-        return build(m.get("profile", "circular"), n1, n2, c, d1, d2, tip)
+        pair = build(m.get("profile", "circular"), n1, n2, c, d1, d2, tip)
     except CaseError as e:
         raise CaseError(f"{e} ({where})") from None
+    return dataclasses.replace(pair, blow_hole=hole)
 
 
 def examples() -> dict[str, TwinScrewPair]:

@@ -2,10 +2,12 @@
 
 Seed 003 names four sealing lines: the leading and trailing tip lines of both rotors on
 the casing, the interlobe line between the rotors, and the front (end-face) line at the
-discharge end; the blow-hole goes with the tip lines.  Each tip and interlobe line is a
-track of the section (:class:`..section.Track`) swept along the rotors; a line between
-two chambers is seen from both (a male groove's leading tip is its older neighbour's
-trailing tip), so one path carries both columns.
+discharge end; "the tip leakage areas are accompanied by the blow-hole areas".  Each tip
+and interlobe line is a track of the section (:class:`..section.Track`) swept along the
+rotors; a line between two chambers is seen from both (a male groove's leading tip is
+its older neighbour's trailing tip), so one path carries both columns.  The blow-holes
+at both cusps (:mod:`.blowhole`) are orifices: their columns are areas, the gap does
+not enter.
 
 End faces (seed 003's front sealing line): a groove's section on an end plate is
 separated from the next groove's by the lobe between them, and gas crosses the lobe's
@@ -20,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..table import LeakagePath, track_column
+from ..table import LeakagePath, opening_column, track_column
 
 #: The same line seen from the chamber beyond it.
 PARTNER = {"tip-male-lead": "tip-male-trail", "tip-female-lead": "tip-female-trail",
@@ -35,8 +37,10 @@ def _partner(name: str) -> str | None:
     return other + (f"#{rest}" if rest else "")
 
 
-def twin_screw_paths(track_lines: dict) -> tuple[LeakagePath, ...]:
-    """Paths for the tracks' lines (keys (track name, offset)) and the end faces."""
+def twin_screw_paths(track_lines: dict, opening_areas: dict | None = None
+                     ) -> tuple[LeakagePath, ...]:
+    """Paths for the tracks' lines and the openings' areas (both keyed (name, offset))
+    and the end faces."""
     paths = [
         LeakagePath("lp-front+1", "end-face", 1, "seal_front_lp_m", report="lp_face"),
         LeakagePath("hp-front+1", "end-face", 1, "seal_front_hp_m", report="hp_face"),
@@ -55,6 +59,13 @@ def twin_screw_paths(track_lines: dict) -> tuple[LeakagePath, ...]:
         paths.append(LeakagePath(
             f"{name}{d:+d}", kind, d, track_column(name, d),
             mirror=None if mirror is None else track_column(*mirror), report=kind))
+    for (name, d) in sorted(opening_areas or {}):
+        # an opening is seen from both chambers under one name, offsets opposite
+        if d < 0 and (name, -d) in opening_areas:
+            continue
+        mirror = opening_column(name, -d) if (name, -d) in opening_areas else None
+        paths.append(LeakagePath(f"{name}{d:+d}", "blow-hole", d, opening_column(name, d),
+                                 mirror=mirror, measure="area", report=name))
     return tuple(paths)
 
 

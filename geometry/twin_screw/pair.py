@@ -86,6 +86,8 @@ class TwinScrewPair(RotorPair):
     male: TwinProfile
     female: TwinProfile
     label: str = "twin-screw"
+    #: How the blow-hole is spanned (:mod:`.blowhole`): "cusp-plane" or "plane".
+    blow_hole: str = "cusp-plane"
 
     def __post_init__(self):
         if self.male.lobes != self.gearing.lobes_male or \
@@ -314,16 +316,23 @@ class TwinScrewPair(RotorPair):
         return None
 
     def swept_figures(self, machine) -> dict:
-        """Seed 004 Fig. 2: the interlobe contact line's length over one lobe period
-        (straight from the rack, :mod:`.contact_line`)."""
+        """The blow-hole's area (:mod:`.blowhole`: the largest opening at the discharge-
+        side cusp to the chamber ahead) and seed 004 Fig. 2, the interlobe contact
+        line's length over one lobe period (straight from the rack, :mod:`.contact_line`)."""
+        from .blowhole import NAMES
         from .contact_line import contact_line_length
 
+        out = {}
+        hole = [a for (name, d), a in machine.opening_areas.items()
+                if name == NAMES[False] and d > 0]
+        if hole:
+            out["blow_hole_area_mm2"] = float(max(a.max() for a in hole) * 1e6)
         arcs = self.rack
         if arcs is None or machine.sweep.kind == "conical":
-            return {}
+            return out
         thetas = np.linspace(0.0, self.period, CONTACT_LINE_SAMPLES, endpoint=False)
         lengths = np.array([contact_line_length(self, arcs, machine.sweep, t) for t in thetas])
-        return {"contact_line_length_max_mm": float(lengths.max() * 1e3),
+        return {**out, "contact_line_length_max_mm": float(lengths.max() * 1e3),
                 "contact_line_length_min_mm": float(lengths.min() * 1e3)}
 
     @cached_property
@@ -340,7 +349,7 @@ class TwinScrewPair(RotorPair):
 
         return front_lines(self, machine)
 
-    def leakage_paths(self, far_lines, track_lines=None) -> tuple:
+    def leakage_paths(self, far_lines, track_lines=None, opening_areas=None) -> tuple:
         from .leakage import twin_screw_paths
 
-        return twin_screw_paths(track_lines or {})
+        return twin_screw_paths(track_lines or {}, opening_areas or {})

@@ -112,6 +112,10 @@ class Part:
     piece: int = 0  # which connected piece of the whole fluid it was cut from
     centroid: np.ndarray | None = None  # set until its age is known
     polygons: list = field(default_factory=list)  # rings, metres, fixed frame
+    #: length of its cut along the cusp line from its own side's cusp point (the
+    #: opening to the other rotor's groove there; :mod:`.blowhole`)
+    cusp_cut: float = 0.0
+    cusp_top: bool = False  # whether that cusp point is the top one (y > 0)
 
 
 class SectionCutter(Boundaries):

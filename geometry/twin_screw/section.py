@@ -32,6 +32,7 @@ from rotorflow.errors import CaseError
 
 from ..planar import TWO_PI
 from ..section import POINTS_PER_PERIOD, SectionChamber, Track
+from .blowhole import build_openings, openings_of
 from .regions import FEMALE, MALE
 
 #: A contact seen from the parts on both its sides is one point: within this (per C).
@@ -106,7 +107,7 @@ def section_chamber(pair, points_per_period: int = POINTS_PER_PERIOD) -> Section
     shift = pair.female_shift
     nodes = defaultdict(lambda: {"area": 0.0, "force": np.zeros((2, 2)),
                                  "torque": np.zeros(2), "perimeter": np.zeros(2),
-                                 "seals": []})
+                                 "seals": [], "openings": []})
     for m, (psi, parts) in enumerate(zip(psis, scans, strict=True)):
         qs = [chamber_index(pair, p, psi, shift) for p in parts]
         for p, q in zip(parts, qs, strict=True):
@@ -115,6 +116,8 @@ def section_chamber(pair, points_per_period: int = POINTS_PER_PERIOD) -> Section
             node["force"] += p.force
             node["torque"] += p.torque
             node["perimeter"] += p.perimeter
+        for q, name, offset, width in openings_of(parts, qs):
+            nodes[m + q * points_per_period]["openings"].append((name, offset, width))
         for q, name, kind, point, other, rate in _seals(pair, parts, qs):
             nodes[m + q * points_per_period]["seals"].append((name, kind, point, other - q,
                                                               rate))
@@ -173,16 +176,18 @@ def _assemble(pair, psi0, ppp, nodes) -> SectionChamber:
     torque = np.array([nodes[k]["torque"] if k in nodes else np.zeros(2) for k in idx])
     perim = np.array([nodes[k]["perimeter"] if k in nodes else np.zeros(2) for k in idx])
     tracks = _tracks([nodes[k]["seals"] if k in nodes else [] for k in idx], n)
+    psi = psi0 + h * idx
+    openings = build_openings(pair, psi, [nodes[k]["openings"] if k in nodes else []
+                                          for k in idx], tracks)
     zero2 = np.zeros((n, 2))
     zeros = np.zeros(n, dtype=int)
-    psi = psi0 + h * idx
     return SectionChamber(
         psi=psi, area=area, force=force, torque=torque, perimeter=perim,
         trail=zero2, lead=zero2, phi_i=float(psi[0]), phi_f=float(psi[-1]),
         speed_ratio=tuple(r.speed_ratio for r in pair.rotors),
         lead_offset=zeros, trail_offset=zeros, lead_id=zeros, trail_id=zeros,
         lead_kind=np.full(n, "interlobe"), trail_kind=np.full(n, "interlobe"),
-        tracks=tracks,
+        tracks=tracks, openings=openings,
     )
 
 

@@ -64,9 +64,6 @@ class Assembly:
     discharge_open: float | None = None
     early_opening: float = 0.0
 
-    def part(self, name: str) -> Part:
-        return next(p for p in self.parts if p.name == name)
-
     @property
     def wall(self) -> Part | None:
         """The rotor that encloses the others (its material outside), if any."""

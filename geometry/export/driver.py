@@ -1,24 +1,33 @@
 """`rotorflow export`: the solids and machining files a case's [export] section asks for.
 
-Only the formats named are built.  Every file is checked before the export counts as
-done, and the figures of the checks go into ``export.json`` beside the files:
+Any family, through one code path: every rotor of the pair is a part by its name
+(outer/inner for the internal gear, male/female for a twin screw) with its material
+side, and the casing is the pair's bores (:mod:`.assembly`).  Only the formats named
+are built.  Every file is checked before the export counts as done, and the figures
+of the checks go into ``export.json`` beside the files:
 
-* STL (outer.stl, inner.stl, fluid.stl): closed, consistently oriented 2-manifolds
+* STL (``<rotor>.stl``, fluid.stl): closed, consistently oriented 2-manifolds
   (manifold3d and a directed-edge pairing test, never repaired); the volume against the
   analytic one; the largest distance of any vertex, edge midpoint or facet centroid of
   the flanks from the analytic flank (measured by foot points; the end faces are exact
   planes whose boundary is the flank's end row).
-* The outer rotor is the material between its profile and its outside cylinder (the
-  casing bore, ``bore_diameter_mm``, scaled with the section along a conical rotor).
-* The fluid domain is the space inside the casing bore between the end plates, less
-  both rotors at ``fluid_angle_deg``, with the suction and discharge ports
-  (:mod:`.ports`) cut ``port_depth_mm`` deep into the end plates.  It needs a positive
-  clearance; its flanks are meshed to a tolerance below half the narrowest gap.  Its
-  volume without the ports is checked against the casing less both rotors and against
-  the sum of the chamber table's volumes at that angle plus the clearance's volume.
-* STEP (outer.step, inner.step): one solid per rotor, re-imported and checked.
-* Profiles (CSV, DXF), point clouds (CSV, PLY), the inner rotor's form cutter (CSV and
-  a JSON side-car), see :mod:`.csvfile`, :mod:`.dxf`, :mod:`.ply` and :mod:`.cutter`.
+* A rotor with its material inside its profile (inner, male, female) is the swept
+  profile with its end caps; one with its material outside (the internal gear's outer
+  rotor) is the material between its profile and its outside cylinder (the casing
+  bore, ``bore_diameter_mm``, scaled with the section along a conical rotor).
+* The fluid domain (:mod:`.fluid`) is the space inside the casing between the end
+  plates (inside the outer rotor; inside the union of a twin screw's bores, each
+  ``tip_clearance_um`` outside its rotor), less the rotors at ``fluid_angle_deg``, with
+  the suction and discharge ports (:mod:`..ports`) cut ``port_depth_mm`` deep into the
+  end plates.  It needs positive clearances; its flanks are meshed to a tolerance
+  below half the narrowest gap.  Its volume without the ports is checked against the
+  casing less the rotors and against the sum of the chamber table's volumes at that
+  angle plus what the clearances open.
+* STEP (``<rotor>.step``): one solid per rotor, re-imported and checked (volume, and
+  the faces' deviation within the tolerance).
+* Profiles (CSV, DXF), point clouds (CSV, PLY), the form cutter of every rotor with its
+  material inside (``<rotor>_cutter.csv`` and a JSON side-car) with its round trip,
+  see :mod:`.csvfile`, :mod:`.dxf`, :mod:`.ply` and :mod:`.cutter`.
 
 All lengths in files are in ``units`` (mm by default); export.json is SI.
 """

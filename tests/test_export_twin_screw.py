@@ -31,6 +31,8 @@ from rotorflow.geometry.polygons import signed_area
 from rotorflow.geometry.summary import build_machine
 from rotorflow.workflow.case import load_case
 
+from .conftest import CASES
+
 MACHINE = """
 [machine]
 type = "twin-screw"
@@ -324,3 +326,15 @@ def test_step_solids(pair_case, tmp_path):
         chk = check_step(tmp_path / f"{name}.step")  # re-imported once more here
         assert chk.volumes == 1 and chk.closed
         assert chk.volume_m3 == pytest.approx(area * LENGTH, rel=1e-4)
+
+
+@pytest.mark.parametrize("section, words", [
+    ({"tip_clearance_um": 20}, "tip_clearance_um"),
+    ({"clearance_on": "male"}, "clearance_on = 'male'"),
+    ({"cutter_setting_angle_deg": {"female": 40}}, "'female'"),
+])
+def test_twin_screw_keys_are_errors_on_an_internal_gear(tmp_path, section, words):
+    case = load_case(CASES / "default.toml")
+    with pytest.raises(CaseError, match=words):
+        export(case, Export.from_section({"formats": ["stl"], **section}), tmp_path)
+    assert not any(tmp_path.iterdir())

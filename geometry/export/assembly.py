@@ -116,11 +116,11 @@ def _checked_names(pair, settings: Export) -> str:
     listed = ", ".join(f'"{n}"' for n in names)
     on = settings.clearance_on or names[0]
     if on not in names:
-        raise CaseError(f"clearance_on = {on!r} names no rotor of a {pair.family} pair "
+        raise CaseError(f"clearance_on = {on!r} names no rotor of the {pair.family} pair "
                         f"(one of {listed})")
     for n in sorted(settings.per_rotor_names()):
         if n not in names:
-            raise CaseError(f"the cutter settings name {n!r}, no rotor of a {pair.family} "
+            raise CaseError(f"the cutter settings name {n!r}, no rotor of the {pair.family} "
                             f"pair (one of {listed})")
     return on
 
@@ -130,7 +130,7 @@ def _bores(pair, settings: Export, curves: dict, tol: float):
     ring = [r for r in pair.rotors if not r.material_inside]
     if ring:
         if settings.tip_clearance_m is not None:
-            raise CaseError(f"tip_clearance_um does not apply to a {pair.family} pair: its "
+            raise CaseError(f"tip_clearance_um does not apply to the {pair.family} pair: its "
                             f"casing is the {ring[0].name} rotor's outside (bore_diameter_mm)")
         bores = pair.casing_bores(None if settings.bore_diameter_m is None
                                   else 0.5 * settings.bore_diameter_m)
@@ -140,7 +140,7 @@ def _bores(pair, settings: Export, curves: dict, tol: float):
                             f"rotor's profile diameter {2e3 * curve.radius_max:.4f} mm")
         return tuple(bores), None
     if settings.bore_diameter_m is not None:
-        raise CaseError(f"bore_diameter_mm does not apply to a {pair.family} pair: each rotor "
+        raise CaseError(f"bore_diameter_mm does not apply to the {pair.family} pair: each rotor "
                         "turns in its own bore; set tip_clearance_um")
     tip = settings.tip_clearance_m
     tip = min(settings.clearance_m) if tip is None else tip

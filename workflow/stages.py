@@ -266,7 +266,8 @@ register(Stage(
     description="solids and machining files of the [export] section (rotorflow export)",
     # The fluid domain's port pockets follow the port timing of [operating].
     reads=("machine", "sweep", "export", "operating.volume_ratio",
-           "operating.suction_close_deg", "operating.discharge_open_deg"),
+           "operating.suction_close_deg", "operating.discharge_open_deg",
+           "operating.discharge_early_opening_deg"),
     code=("rotorflow.geometry",),
     report=f"{_REPORT}:solids_section",
     missing=_has_export,

@@ -1,12 +1,16 @@
-"""Form (disc) cutter for the externally toothed (inner) rotor of a helical pair.
+"""Form (disc) cutter for an externally toothed rotor of a helical pair (the internal
+gear's inner rotor, either twin-screw rotor).
 
 The rotor flank is a helical surface of constant lead; in the rotor's own frame (origin
 on its axis, z along it)
 
-    P(u, z) = R(-k z) p(u) + z e_z,     k = m21 wrap / L  [rad/m]
+    P(u, z) = R(-k z) p(u) + z e_z,     k = omega wrap / L  [rad/m]
 
-with ``p`` the transverse profile turned so that the tooth space being cut faces +x
-(its root, g = 0, on +x; u from -1/2 to 1/2 runs tip to tip).  The tool is a surface of
+(omega the rotor's speed ratio) with ``p`` the transverse profile turned so that the
+tooth space being cut faces +x: its root (the smallest radius of the lobe period about
+u = 0) on +x, u running from the tip before it to the tip after it (the largest radii
+within a lobe period either side; for the internal gear's inner rotor u from -1/2 to
+1/2, root g = 0), see :func:`tooth_space`.  The tool is a surface of
 revolution about the axis through ``(C, 0, 0)`` with direction
 ``e_t = (0, cos S, sin S)``: C the centre distance, S the setting angle (tan S = k r gives
 a disc plane along the helix at radius r).
@@ -46,6 +50,12 @@ MIN_SPACING = 0.01
 #: Tool angles scanned (rad either side of the plane through both axes) when looking for
 #: interference.
 INTERFERENCE_SPAN = 0.6
+#: Scan points per profile piece on which a tooth space's root and tips are bracketed
+#: (a multiple of 2, so that the middles and ends of pieces are scan points).
+SPACE_SCAN = 512
+#: A scan point is the extremum itself when the radial slope there is below this share
+#: of its neighbours' (rounding, at a symmetric profile's root or tip).
+SPACE_SNAP = 1e-9
 
 
 @dataclass(frozen=True)
@@ -64,12 +74,12 @@ class CutterSetup:
 
 
 class _Turned:
-    """The rotor profile turned so that the root of lobe 0 faces +x (rotor frame)."""
+    """The rotor profile turned so that the root at ``root`` faces +x (rotor frame)."""
 
-    def __init__(self, curve):
+    def __init__(self, curve, root: float = 0.0):
         self.curve = curve
-        root = curve.point(np.array([0.0]))[0]
-        self.turn = -math.atan2(root[1], root[0])
+        root_point = curve.point(np.array([root]))[0]
+        self.turn = -math.atan2(root_point[1], root_point[0])
         self.c, self.s = math.cos(self.turn), math.sin(self.turn)
         self.n = curve.n
         self.name = curve.name
@@ -86,6 +96,56 @@ class _Turned:
 
     def normal(self, u):
         return self._r(self.curve.normal(u))
+
+
+def _radial_slope(curve, u):
+    """p . p' (half the derivative of the squared radius)."""
+    u = np.atleast_1d(np.asarray(u, dtype=float))
+    return np.sum(curve.point(u) * curve.derivative(u), -1)
+
+
+def _extremum(curve, u0: float, h: float) -> float:
+    """The radius extremum bracketed by the scan point ``u0`` and its neighbours ``h``
+    away: the scan point itself if the slope vanishes there to rounding (or changes sign
+    across it, a corner), else the slope's root by bisection."""
+    fa, f0, fb = _radial_slope(curve, [u0 - h, u0, u0 + h])
+    if abs(f0) <= SPACE_SNAP * max(abs(fa), abs(fb)):
+        return u0
+    if np.sign(fa) != np.sign(f0):
+        lo, hi, flo = u0 - h, u0, fa
+    elif np.sign(f0) != np.sign(fb):
+        lo, hi, flo = u0, u0 + h, f0
+    else:
+        return u0
+    for _ in range(BISECT):
+        mid = 0.5 * (lo + hi)
+        fm = float(_radial_slope(curve, mid)[0])
+        if np.sign(fm) == np.sign(flo):
+            lo, flo = mid, fm
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def tooth_space(curve) -> tuple[float, float, float]:
+    """(tip, root, tip): the parameters bounding the tooth space whose root is the
+    smallest radius of the lobe period centred on u = 0, the tips the largest radii
+    within a lobe period before and after it."""
+    per = curve.n / curve.lobes
+    h = 1.0 / SPACE_SCAN
+    m = int(round(per * SPACE_SCAN))
+
+    def scan(a):
+        u = a + h * np.arange(m + 1)
+        return u, np.linalg.norm(curve.point(u), axis=-1)
+
+    u, r = scan(-0.5 * per)
+    root = _extremum(curve, float(u[np.argmin(r)]), h)
+    ub, rb = scan(root - per)
+    ua, ra = scan(root)
+    before = _extremum(curve, float(ub[1:-1][np.argmax(rb[1:-1])]), h)
+    after = _extremum(curve, float(ua[1:-1][np.argmax(ra[1:-1])]), h)
+    return before, root, after
 
 
 def _helix(p, dp, z, k):
@@ -165,16 +225,19 @@ class Cutter:
     contact: np.ndarray  # (n, 3) contact points on the rotor, rotor frame
     axial: np.ndarray  # h: position along the tool axis
     radius: np.ndarray  # R: tool radius
-    turn: float  # rotation applied to the profile (root of lobe 0 on +x)
+    turn: float  # rotation applied to the profile (root of the tooth space on +x)
+    root: float = 0.0  # profile parameter of that root
 
 
-def form_cutter(curve, setup: CutterSetup, tol: float) -> Cutter:
-    """The tool profile generating the tooth space of ``curve`` (inner profile, S2)."""
-    prof = _Turned(curve)
+def form_cutter(curve, setup: CutterSetup, tol: float, space=None) -> Cutter:
+    """The tool profile generating the tooth space ``space`` = (tip, root, tip) of
+    ``curve`` (default :func:`tooth_space`)."""
+    lo, root, hi = tooth_space(curve) if space is None else space
+    prof = _Turned(curve, root)
     us = sample(curve, 0.1 * tol)
-    us = np.where(us > 0.5 * curve.n, us - curve.n, us)
-    u = np.sort(us[(us >= -0.5) & (us <= 0.5)])
-    u = np.unique(np.concatenate([[-0.5], u, [0.5]]))
+    us = us - curve.n * np.floor((us - lo) / curve.n)  # into [lo, lo + n)
+    u = np.sort(us[(us >= lo) & (us <= hi)])
+    u = np.unique(np.concatenate([[lo], u, [hi]]))
     p, dp = prof.point(u), prof.derivative(u)
     o, e = setup.origin, setup.axis
     k = setup.k
@@ -201,7 +264,7 @@ def form_cutter(curve, setup: CutterSetup, tol: float) -> Cutter:
     if np.isnan(z).any():
         i = int(np.nonzero(np.isnan(z))[0][0])
         raise CaseError(
-            f"no contact between the form cutter and the inner rotor at profile point "
+            f"no contact between the form cutter and the {curve.name} rotor at profile point "
             f"({p[i, 0] * 1e3:.3f}, {p[i, 1] * 1e3:.3f}) mm: change "
             "cutter_setting_angle_deg or cutter_centre_distance_mm")
     P, _, _ = _helix(p, dp, z, k)
@@ -209,8 +272,8 @@ def form_cutter(curve, setup: CutterSetup, tol: float) -> Cutter:
     h = d @ e
     R = np.linalg.norm(d - h[:, None] * e, axis=-1)
     if not (R > 0.0).all():
-        raise CaseError("the form cutter's axis passes through the inner rotor: increase "
-                        "cutter_centre_distance_mm")
+        raise CaseError(f"the form cutter's axis passes through the {curve.name} rotor: "
+                        "increase cutter_centre_distance_mm")
     # Near the sigma_bar = 1 point the flank barely moves with u: drop tool points
     # closer than MIN_SPACING * tol to the last one kept (they carry no shape).
     keep = [0]
@@ -220,7 +283,7 @@ def form_cutter(curve, setup: CutterSetup, tol: float) -> Cutter:
     if keep[-1] != len(u) - 1:
         keep[-1] = len(u) - 1
     keep = np.array(keep)
-    return Cutter(setup, u[keep], P[keep], h[keep], R[keep], prof.turn)
+    return Cutter(setup, u[keep], P[keep], h[keep], R[keep], prof.turn, root)
 
 
 def _meridian(axial, radius):
@@ -281,7 +344,7 @@ def regenerate(setup: CutterSetup, axial, radius, refine: int = 2):
 def round_trip(curve, cutter: Cutter, axial=None, radius=None) -> dict:
     """Regenerate the rotor profile from the tool profile (as written, if given) and
     measure it against the analytic profile; also the deepest tool cut into the rotor."""
-    prof = _Turned(curve)
+    prof = _Turned(curve, cutter.root)
     axial = cutter.axial if axial is None else np.asarray(axial, float)
     radius = cutter.radius if radius is None else np.asarray(radius, float)
     s, q = regenerate(cutter.setup, axial, radius)

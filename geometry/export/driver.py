@@ -1,24 +1,33 @@
 """`rotorflow export`: the solids and machining files a case's [export] section asks for.
 
-Only the formats named are built.  Every file is checked before the export counts as
-done, and the figures of the checks go into ``export.json`` beside the files:
+Any family, through one code path: every rotor of the pair is a part by its name
+(outer/inner for the internal gear, male/female for a twin screw) with its material
+side, and the casing is the pair's bores (:mod:`.assembly`).  Only the formats named
+are built.  Every file is checked before the export counts as done, and the figures
+of the checks go into ``export.json`` beside the files:
 
-* STL (outer.stl, inner.stl, fluid.stl): closed, consistently oriented 2-manifolds
+* STL (``<rotor>.stl``, fluid.stl): closed, consistently oriented 2-manifolds
   (manifold3d and a directed-edge pairing test, never repaired); the volume against the
   analytic one; the largest distance of any vertex, edge midpoint or facet centroid of
   the flanks from the analytic flank (measured by foot points; the end faces are exact
   planes whose boundary is the flank's end row).
-* The outer rotor is the material between its profile and its outside cylinder (the
-  casing bore, ``bore_diameter_mm``, scaled with the section along a conical rotor).
-* The fluid domain is the space inside the casing bore between the end plates, less
-  both rotors at ``fluid_angle_deg``, with the suction and discharge ports
-  (:mod:`.ports`) cut ``port_depth_mm`` deep into the end plates.  It needs a positive
-  clearance; its flanks are meshed to a tolerance below half the narrowest gap.  Its
-  volume without the ports is checked against the casing less both rotors and against
-  the sum of the chamber table's volumes at that angle plus the clearance's volume.
-* STEP (outer.step, inner.step): one solid per rotor, re-imported and checked.
-* Profiles (CSV, DXF), point clouds (CSV, PLY), the inner rotor's form cutter (CSV and
-  a JSON side-car), see :mod:`.csvfile`, :mod:`.dxf`, :mod:`.ply` and :mod:`.cutter`.
+* A rotor with its material inside its profile (inner, male, female) is the swept
+  profile with its end caps; one with its material outside (the internal gear's outer
+  rotor) is the material between its profile and its outside cylinder (the casing
+  bore, ``bore_diameter_mm``, scaled with the section along a conical rotor).
+* The fluid domain (:mod:`.fluid`) is the space inside the casing between the end
+  plates (inside the outer rotor; inside the union of a twin screw's bores, each
+  ``tip_clearance_um`` outside its rotor), less the rotors at ``fluid_angle_deg``, with
+  the suction and discharge ports (:mod:`..ports`) cut ``port_depth_mm`` deep into the
+  end plates.  It needs positive clearances; its flanks are meshed to a tolerance
+  below half the narrowest gap.  Its volume without the ports is checked against the
+  casing less the rotors and against the sum of the chamber table's volumes at that
+  angle plus what the clearances open.
+* STEP (``<rotor>.step``): one solid per rotor, re-imported and checked (volume, and
+  the faces' deviation within the tolerance).
+* Profiles (CSV, DXF), point clouds (CSV, PLY), the form cutter of every rotor with its
+  material inside (``<rotor>_cutter.csv`` and a JSON side-car) with its round trip,
+  see :mod:`.csvfile`, :mod:`.dxf`, :mod:`.ply` and :mod:`.cutter`.
 
 All lengths in files are in ``units`` (mm by default); export.json is SI.
 """
@@ -37,7 +46,7 @@ from rotorflow.errors import CaseError
 
 from ..curves import sample_polygon
 from . import csvfile, dxf, ply, stl
-from .assembly import Assembly, assemble, check_volume, rel_error
+from .assembly import Assembly, Part, assemble, check_volume, rel_error
 from .cloud import cloud
 from .fluid import write_fluid
 from .settings import Export
@@ -63,11 +72,13 @@ def export(case, settings: Export, out: Path) -> dict:
         raise CaseError("the fluid domain needs clearance_um > 0 everywhere: with no gap the "
                         "chambers touch along the sealing lines and it is not a solid")
     asm = assemble(case, settings)
+    if settings.wants("fluid") and asm.tip_clearance is not None \
+            and not asm.tip_clearance > 0.0:
+        raise CaseError("the fluid domain needs tip_clearance_um > 0: with no gap the rotor "
+                        "tips touch their bores and it is not a solid")
     if settings.wants("cutter"):  # fail before building anything else
-        from .cutter import default_setup
-
-        default_setup(asm.machine.pair, asm.machine.sweep, settings.cutter_setting_angle_rad,
-                      settings.cutter_centre_distance_m)
+        for part in asm.holes:
+            _setup(asm, part.name)
     manifest = _manifest(case, asm, settings)
     files, timing = manifest["files"], manifest["timing_s"]
     timing["profiles_s"] = time.perf_counter() - t_start
@@ -81,8 +92,9 @@ def export(case, settings: Export, out: Path) -> dict:
     _machining(asm, out, manifest)
     if settings.wants("cutter"):
         t0 = time.perf_counter()
-        log.info("%s: form cutter", case.name)
-        files.update(_cutter(out, asm, settings.units, settings.unit_scale))
+        log.info("%s: form cutters", case.name)
+        for part in asm.holes:
+            files.update(_cutter(out, asm, part, settings.units, settings.unit_scale))
         timing["cutter_s"] = time.perf_counter() - t0
     for name, entry in files.items():
         entry["bytes"] = (out / name).stat().st_size
@@ -91,62 +103,85 @@ def export(case, settings: Export, out: Path) -> dict:
     return manifest
 
 
+#: How each family orients its rotors at reference angle 0 (export.json's frame).
+ORIENTATION = {
+    "internal-gear": "pin 0 on +y",
+    "twin-screw": "female axis at (C, 0), both rotors' lobe 0 as the rack generates it",
+}
+
+
 def _manifest(case, asm: Assembly, settings: Export) -> dict:
     """export.json before any file is written: frames, tolerances, analytic volumes."""
     sweep = asm.machine.sweep
-    inner_axis = [float(c) for c in asm.inner.centre]
-    return {
+    ref = asm.parts[0].name
+    orient = ORIENTATION.get(asm.machine.pair.family, "rotors as the family places them")
+    origins = ", ".join(f"{p.name}: origin O{i + 1}" for i, p in enumerate(asm.parts))
+    man = {
         "case": case.name,
         "units": settings.units,
-        "frame": "machine: outer axis on z, low-pressure face at z = 0, pin 0 on +y at "
-                 "outer angle 0; rotors placed at fluid_angle_rad (STL, STEP, clouds)",
-        "profile_frame": "each rotor's own frame at z = 0 and angle 0 (outer: origin O1, "
-                         "inner: origin O2), clearance included (DXF, CSV profiles)",
+        "frame": f"machine: {ref} axis on z, low-pressure face at z = 0, {orient} at {ref} "
+                 "angle 0; rotors placed at fluid_angle_rad (STL, STEP, clouds)",
+        "profile_frame": f"each rotor's own frame at z = 0 and angle 0 ({origins}), "
+                         "clearance included (DXF, CSV profiles)",
         "tolerance_m": settings.tolerance_m,
         "clearance_m": list(settings.clearance_m),
-        "clearance_on": settings.clearance_on,
+        "clearance_on": asm.clearance_on,
         "fluid_angle_rad": settings.fluid_angle_rad,
-        "bore_radius_m": asm.bore_radius,
-        "inner_axis_m": [[*inner_axis, 0.0],
-                         [*(float(sweep.scale(sweep.length)) * c for c in inner_axis),
-                          sweep.length]],
-        "analytic_volumes_m3": asm.analytic,
-        "files": {},
-        "timing_s": {},
     }
+    wall = asm.wall
+    if wall is not None:  # the casing is the enclosing rotor's outside
+        man["bore_radius_m"] = wall.outside_radius
+    else:
+        man["tip_clearance_m"] = asm.tip_clearance
+        man["casing_bores_m"] = [{"centre": [float(c) for c in centre], "radius": r}
+                                 for centre, r in asm.bores]
+    s_end = float(sweep.scale(sweep.length))
+    for p in asm.parts:
+        axis = [float(c) for c in p.surface.centre]
+        if any(axis):
+            man[f"{p.name}_axis_m"] = [[*axis, 0.0], [*(s_end * c for c in axis),
+                                                      sweep.length]]
+    man.update({"analytic_volumes_m3": asm.analytic, "files": {}, "timing_s": {}})
+    return man
 
 
 def _meshes(case, asm: Assembly, out: Path, manifest: dict) -> None:
     """The flank grids, then the rotor STLs and the fluid domain asked for."""
     settings, files, timing = asm.settings, manifest["files"], manifest["timing_s"]
     scale, fluid = settings.unit_scale, settings.wants("fluid")
-    analytic = asm.analytic
     t0 = time.perf_counter()
     tol_mesh = settings.tolerance_m
+    gap = None
     if fluid:
         c_min = min(settings.clearance_m)
-        nxy = min(min_horizontal_normal(asm.outer), min_horizontal_normal(asm.inner))
+        nxy = min(min_horizontal_normal(p.surface) for p in asm.parts)
+        gap = c_min * nxy
         tol_mesh = min(tol_mesh, FLUID_GAP_SHARE * c_min * nxy)
-        manifest["fluid_gap_min_m"] = c_min * nxy
+        if asm.tip_clearance is not None:  # the bores are walls too (radial gaps)
+            sw = asm.machine.sweep
+            tip = asm.tip_clearance * min(1.0, float(sw.scale(sw.length)))
+            gap = min(gap, tip)
+            tol_mesh = min(tol_mesh, FLUID_GAP_SHARE * tip)
+        manifest["fluid_gap_min_m"] = gap
     manifest["mesh_tolerance_m"] = tol_mesh
     log.info("%s: meshing the flanks to %.3g um", case.name, tol_mesh * 1e6)
-    go, dev_o = flank_to_tolerance(asm.outer, tol_mesh)
-    gi, dev_i = flank_to_tolerance(asm.inner, tol_mesh)
-    check_sections(go, "outer rotor")
-    check_sections(gi, "inner rotor")
+    grids, devs = {}, {}
+    for p in asm.parts:
+        grids[p.name], devs[p.name] = flank_to_tolerance(p.surface, tol_mesh)
+        check_sections(grids[p.name], f"{p.name} rotor")
     timing["flanks_s"] = time.perf_counter() - t0
     if settings.wants("stl"):
         t0 = time.perf_counter()
-        for name, grid, dev, bore, key in (("outer", go, dev_o, asm.bore_radius, "outer_m3"),
-                                           ("inner", gi, dev_i, None, "inner_m3")):
-            mesh = rotor_mesh(grid, bore, tol_mesh, name)
-            files[f"{name}.stl"] = _write_stl(out / f"{name}.stl", mesh, scale,
-                                              analytic[key], dev)
+        for p in asm.parts:
+            mesh = rotor_mesh(grids[p.name], p.outside_radius, tol_mesh, p.name)
+            files[f"{p.name}.stl"] = _write_stl(out / f"{p.name}.stl", mesh, scale,
+                                                asm.analytic[f"{p.name}_m3"], devs[p.name])
         timing["stl_s"] = time.perf_counter() - t0
     if fluid:
         t0 = time.perf_counter()
         log.info("%s: fluid domain and ports", case.name)
-        files["fluid.stl"] = write_fluid(out / "fluid.stl", asm, go, gi, dev_o, dev_i, scale)
+        files["fluid.stl"] = write_fluid(out / "fluid.stl", asm, grids, devs, scale, gap,
+                                         tol_mesh)
         timing["fluid_s"] = time.perf_counter() - t0
 
 
@@ -155,19 +190,20 @@ def _machining(asm: Assembly, out: Path, manifest: dict) -> None:
     settings, files = asm.settings, manifest["files"]
     scale, unit, tol = settings.unit_scale, settings.units, settings.tolerance_m
     if settings.wants("dxf") or settings.wants("csv"):
-        for name, curve, bore in (("outer", asm.outer.curve, asm.bore_radius),
-                                  ("inner", asm.inner.curve, None)):
-            poly = sample_polygon(curve, tol)
+        for p in asm.parts:
+            name = p.name
+            poly = sample_polygon(p.curve, tol)
             if settings.wants("csv"):
                 csvfile.write_profile_csv(out / f"{name}_profile.csv", poly, unit, scale)
                 files[f"{name}_profile.csv"] = {"vertices": len(poly), "closed": True}
             if settings.wants("dxf"):
-                dxf.write(out / f"{name}_profile.dxf", poly, scale, unit, bore)
+                dxf.write(out / f"{name}_profile.dxf", poly, scale, unit, p.outside_radius)
                 files[f"{name}_profile.dxf"] = {"vertices": len(poly), "closed": True}
     if settings.wants("csv") or settings.wants("ply"):
         t0 = time.perf_counter()
-        for name, surf, inside in (("outer", asm.outer, False), ("inner", asm.inner, True)):
-            pts, nrm = cloud(surf, settings.cloud_spacing_m, inside)
+        for p in asm.parts:
+            name = p.name
+            pts, nrm = cloud(p.surface, settings.cloud_spacing_m, p.material_inside)
             if settings.wants("csv"):
                 csvfile.write_cloud_csv(out / f"{name}_cloud.csv", pts, nrm, unit, scale)
                 files[f"{name}_cloud.csv"] = {"points": len(pts)}
@@ -203,15 +239,17 @@ def _step(out: Path, asm: Assembly, analytic: dict) -> dict:
 
     files = {}
     tol = asm.settings.tolerance_m
-    for name, surf, bore, key in (("outer", asm.outer, asm.bore_radius, "outer_m3"),
-                                  ("inner", asm.inner, None, "inner_m3")):
-        path = out / f"{name}.step"
-        write_rotor_step(path, surf, tol, bore)
-        chk = check_step(path, surf, tol)
+    for p in asm.parts:
+        path, key = out / f"{p.name}.step", f"{p.name}_m3"
+        write_rotor_step(path, p.surface, tol, p.outside_radius)
+        chk = check_step(path, p.surface, tol)
         if chk.volumes != 1 or not chk.closed:
             raise RuntimeError(f"{path.name} re-imports as {chk.volumes} solids "
                                f"(closed shell: {chk.closed})")
         check_volume(path.name, chk.volume_m3, analytic[key])
+        if chk.deviation_m > tol:
+            raise RuntimeError(f"{path.name}: its faces deviate {chk.deviation_m * 1e6:.3g} um "
+                               f"from the analytic flank (tolerance {tol * 1e6:.3g} um)")
         files[path.name] = {
             "solids": chk.volumes,
             "faces": chk.faces,
@@ -225,33 +263,38 @@ def _step(out: Path, asm: Assembly, analytic: dict) -> dict:
     return files
 
 
-def _cutter(out: Path, asm: Assembly, unit: str, scale: float) -> dict:
-    from .cutter import default_setup, form_cutter, round_trip
+def _setup(asm: Assembly, rotor: str):
+    """The form-cutter setup of one rotor (its settings, else the defaults)."""
+    from .cutter import default_setup
 
-    s = asm.settings
-    m = asm.machine
-    setup = default_setup(m.pair, m.sweep, s.cutter_setting_angle_rad,
-                          s.cutter_centre_distance_m)
-    curve = asm.inner.curve
-    cut = form_cutter(curve, setup, s.tolerance_m)
-    path = out / "inner_cutter.csv"
+    angle, centre = asm.settings.cutter_setting(rotor)
+    return default_setup(asm.machine.pair, asm.machine.sweep, angle, centre, rotor)
+
+
+def _cutter(out: Path, asm: Assembly, part: Part, unit: str, scale: float) -> dict:
+    """The form cutter of one rotor: its profile (CSV), written, read back and enveloped
+    back onto the rotor (round trip), and its JSON side-car."""
+    from .cutter import form_cutter, round_trip
+
+    name, curve, tol = part.name, part.curve, asm.settings.tolerance_m
+    setup = _setup(asm, name)
+    cut = form_cutter(curve, setup, tol)
+    path = out / f"{name}_cutter.csv"
     data = np.column_stack([cut.axial, cut.radius, cut.contact]) * scale
     np.savetxt(path, data, delimiter=",", comments="", fmt="%.9f",
                header=f"axial_{unit},radius_{unit},rotor_x_{unit},rotor_y_{unit},rotor_z_{unit}")
     written = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2) / scale
     rt = round_trip(curve, cut, written[:, 0], written[:, 1])
-    tol = s.tolerance_m
+    change = f"change cutter_setting_angle_deg or cutter_centre_distance_mm ({name})"
     if rt["round_trip_max_m"] > tol:
-        raise CaseError(f"the form cutter regenerates the inner rotor only to "
-                        f"{rt['round_trip_max_m'] * 1e6:.3g} um (> tolerance_um): change "
-                        "cutter_setting_angle_deg or cutter_centre_distance_mm")
+        raise CaseError(f"the form cutter regenerates the {name} rotor only to "
+                        f"{rt['round_trip_max_m'] * 1e6:.3g} um (> tolerance_um): {change}")
     if rt["interference_m"] > tol:
         raise CaseError(f"the form cutter cuts {rt['interference_m'] * 1e6:.3g} um into the "
-                        "inner rotor: change cutter_setting_angle_deg or "
-                        "cutter_centre_distance_mm")
+                        f"{name} rotor: {change}")
     side = {
         "tool_axis": "through (centre_distance, 0, 0), direction (0, cos S, sin S), rotor frame",
-        "rotor_frame": "inner rotor axis on z, low-pressure face z = 0, tooth space of lobe 0 "
+        "rotor_frame": f"{name} rotor axis on z, low-pressure face z = 0, tooth space of lobe 0 "
                        "centred on +x (profile turned by turn_rad)",
         "setting_angle_deg": math.degrees(setup.setting_angle),
         "centre_distance_m": setup.centre_distance,
@@ -263,6 +306,6 @@ def _cutter(out: Path, asm: Assembly, unit: str, scale: float) -> dict:
         "tolerance_m": tol,
         "units": unit,
     }
-    (out / "inner_cutter.json").write_text(json.dumps(side, indent=2) + "\n")
-    return {"inner_cutter.csv": {"points": int(len(cut.u)), **rt},
-            "inner_cutter.json": {}}
+    (out / f"{name}_cutter.json").write_text(json.dumps(side, indent=2) + "\n")
+    return {f"{name}_cutter.csv": {"points": int(len(cut.u)), **rt},
+            f"{name}_cutter.json": {}}

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..curves import sample
 from ..polygons import check_simple
+from .casing import ring_size
 from .surface import SweptSurface, foot_points
 
 log = logging.getLogger(__name__)
@@ -244,13 +245,6 @@ def _cap(rings, offsets, top: bool):
     return tri if top else tri[:, ::-1]
 
 
-def _ring(radius: float, tol: float):
-    """Vertex count and area-neutral radius of a circle polygon with deviation <= tol."""
-    m = max(int(math.ceil(2.0 * math.pi / math.sqrt(12.0 * tol / radius))), 16)
-    d = 2.0 * math.pi / m
-    return m, radius * math.sqrt(d / math.sin(d))
-
-
 def rotor_mesh(flank: FlankGrid, bore_radius: float | None, tol: float, name: str) -> TriMesh:
     """Closed rotor: the flank, the end caps, and (outer rotor) the bore cylinder."""
     nz, nu = flank.shape
@@ -266,7 +260,7 @@ def rotor_mesh(flank: FlankGrid, bore_radius: float | None, tol: float, name: st
     sw = flank.surface.sweep
     # The bore is a cylinder (a cone when scaled): straight generators, so its two end
     # rings are exact; the ring is sized at the larger (z = 0) end.
-    m, r = _ring(bore_radius, tol)
+    m, r = ring_size(bore_radius, tol)
     a = 2.0 * math.pi * np.arange(m) / m
     circle = np.stack([np.cos(a), np.sin(a)], -1) * r
     ring0 = np.concatenate([circle, np.zeros((m, 1))], -1)
@@ -288,31 +282,39 @@ def rotor_mesh(flank: FlankGrid, bore_radius: float | None, tol: float, name: st
 
 def _cap_with_hole(outer, outer_off, hole, hole_off, top: bool):
     """Annulus cap: ``outer`` ring (ccw) with the ccw polygon ``hole`` cut out."""
+    return _cap_with_holes(outer, outer_off, [(hole, hole_off)], top)
+
+
+def _cap_with_holes(outer, outer_off, holes, top: bool):
+    """Cap: ``outer`` ring (ccw) with the ccw polygons ``holes`` ((ring, offset), ...)
+    cut out."""
     import manifold3d
 
-    pts = [np.ascontiguousarray(outer[:, :2]), np.ascontiguousarray(hole[::-1, :2])]
+    pts = [np.ascontiguousarray(outer[:, :2])]
+    glob = [outer_off + np.arange(len(outer))]
+    for hole, off in holes:
+        pts.append(np.ascontiguousarray(hole[::-1, :2]))
+        glob.append(off + np.arange(len(hole))[::-1])
     tri = np.asarray(manifold3d.triangulate(pts), dtype=np.int64)
-    no = len(outer)
-    nh = len(hole)
-    glob = np.concatenate([outer_off + np.arange(no), hole_off + np.arange(nh)[::-1]])
-    tri = glob[tri]
+    tri = np.concatenate(glob)[tri]
     return tri if top else tri[:, ::-1]
 
 
-def fluid_mesh(outer: FlankGrid, inner: FlankGrid, name: str = "fluid") -> TriMesh:
-    """Space between the outer flank (outside) and the inner flank (hole), z in [0, L]."""
-    no = outer.vertices.shape[0] * outer.vertices.shape[1]
-    Vo = outer.vertices.reshape(-1, 3)
-    Vi = inner.vertices.reshape(-1, 3)
-    V = np.concatenate([Vo, Vi])
-    nzo, nuo = outer.shape
-    nzi, nui = inner.shape
-    faces = [outer.triangles, inner.triangles[:, ::-1] + no]
+def fluid_mesh(wall, holes, name: str = "fluid") -> TriMesh:
+    """Space inside ``wall`` (a flank grid or casing tube whose triangles point out of
+    the region it encloses: the internal gear's outer flank, the twin screw's bores)
+    less the flank grids ``holes`` (rotors with their material inside), z in [0, L]."""
+    parts = [wall, *holes]
+    sizes = [g.vertices.shape[0] * g.vertices.shape[1] for g in parts]
+    offs = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int)
+    V = np.concatenate([g.vertices.reshape(-1, 3) for g in parts])
+    faces = [wall.triangles] + [h.triangles[:, ::-1] + off
+                                for h, off in zip(holes, offs[1:], strict=True)]
     for top in (False, True):
-        jo = nzo - 1 if top else 0
-        ji = nzi - 1 if top else 0
-        faces.append(_cap_with_hole(outer.vertices[jo], jo * nuo, inner.vertices[ji],
-                                    no + ji * nui, top))
+        rows = [(g.vertices.shape[0] - 1 if top else 0) for g in parts]
+        rings = [(g.vertices[j], off + j * g.vertices.shape[1])
+                 for g, j, off in zip(parts, rows, offs, strict=True)]
+        faces.append(_cap_with_holes(rings[0][0], rings[0][1], rings[1:], top))
     return TriMesh(V, np.concatenate(faces), name)
 
 

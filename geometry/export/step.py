@@ -276,14 +276,22 @@ def _span_grid(surface: SweptSurface, tol: float) -> dict:
     return {j: (u, z) for j, u in enumerate(_piece_nodes(surface, tol))}
 
 
-def _edges(lo, hi, grid):
-    """Span edges of a face: its patch knots if it is flank piece j, else uniform."""
+def _patch_piece(lo, hi, grid) -> int | None:
+    """The flank piece j whose patch has the parameter bounds (lo, hi), if any."""
     if grid is not None:
         j = int(round(lo[0]))
         if j in grid and abs(lo[0] - j) < 1e-9 and abs(hi[0] - j - 1) < 1e-9:
-            u, z = grid[j]
+            z = grid[j][1]
             if abs(lo[1] - z[0]) < 1e-6 and abs(hi[1] - z[-1]) < 1e-6:
-                return u, z
+                return j
+    return None
+
+
+def _edges(lo, hi, grid):
+    """Span edges of a face: its patch knots if it is flank piece j, else uniform."""
+    j = _patch_piece(lo, hi, grid)
+    if j is not None:
+        return grid[j]
     return (np.linspace(lo[0], hi[0], GAUSS_PANELS[0] + 1),
             np.linspace(lo[1], hi[1], GAUSS_PANELS[1] + 1))
 
@@ -316,15 +324,11 @@ def _flux_volume(gmsh, vol: int, grid=None) -> float:
 
 def _face_deviation(gmsh, surface: SweptSurface, faces, grid) -> float:
     """Largest distance from the analytic flank of points of the curved faces: the
-    midpoints and quarter points of every span of the flank patches."""
-    from scipy.spatial import cKDTree
-
+    midpoints and quarter points of every span of the flank patches.  A flank patch's
+    parameters are the profile parameter and z [mm], so each point's foot point is
+    sought from its own parameters; other faces start from the nearest point of a
+    dense sampling of the flank."""
     L = surface.length
-    u = sample(surface.curve, 1e-6)
-    zg = np.linspace(0.0, L, 201)
-    U, Z = np.meshgrid(u, zg)
-    ref = surface.point(U, Z)
-    tree = cKDTree(ref.reshape(-1, 3))
     worst = 0.0
     for _, f in faces:
         if gmsh.model.getType(2, f) in ("Plane", "Cylinder", "Cone"):
@@ -337,10 +341,25 @@ def _face_deviation(gmsh, surface: SweptSurface, faces, grid) -> float:
         A, B = np.meshgrid(a, b)
         uv = np.stack([A.ravel(), B.ravel()], -1).ravel()
         pts = np.asarray(gmsh.model.getValue(2, f, uv)).reshape(-1, 3) / MM
-        pts = pts[(pts[:, 2] >= 0.0) & (pts[:, 2] <= L)]
+        inside = (pts[:, 2] >= 0.0) & (pts[:, 2] <= L)
+        pts = pts[inside]
         if not len(pts):
             continue
-        _, i = tree.query(pts)
-        d = foot_points(surface, pts, U.ravel()[i], Z.ravel()[i], iterations=12)
+        if _patch_piece(lo, hi, grid) is not None:
+            u0, z0 = A.ravel()[inside], B.ravel()[inside] / MM
+        else:
+            u0, z0 = _nearest_start(surface, pts)
+        d = foot_points(surface, pts, u0, z0, iterations=12)
         worst = max(worst, float(d.max()))
     return worst
+
+
+def _nearest_start(surface: SweptSurface, pts):
+    """(u, z) of the nearest points of a dense sampling of the flank."""
+    from scipy.spatial import cKDTree
+
+    u = sample(surface.curve, 1e-6)
+    zg = np.linspace(0.0, surface.length, 201)
+    U, Z = np.meshgrid(u, zg)
+    _, i = cKDTree(surface.point(U, Z).reshape(-1, 3)).query(pts)
+    return U.ravel()[i], Z.ravel()[i]

@@ -2,8 +2,11 @@
 
 [machine] keys (besides type and length_mm):
 
-* ``profile``: "circular" (the symmetric circular rack, :mod:`.circular`) or
-  "line-circle" (an asymmetric rack of this project's own making, :mod:`.asymmetric`);
+* ``profile``: "circular" (the symmetric circular rack, :mod:`.circular`),
+  "line-circle" (an asymmetric rack of this project's own making, :mod:`.asymmetric`)
+  or "pin-cycloid" (SRM's asymmetric pin-arc / cycloid profile, :mod:`.pin_cycloid`:
+  the female lies inside its pitch circle, so female_diameter_mm is its pitch diameter
+  and the male's addendum is the pin radius);
 * ``lobes_male``, ``lobes_female``: any combination (3/5, 4/5, 4/6, 5/6, 5/7, ...);
 * ``centre_distance_mm``: the pitch circles follow, r = C N / (N1 + N2);
 * ``male_diameter_mm``, ``female_diameter_mm``: the outer diameters, which fix the
@@ -26,12 +29,33 @@ from .asymmetric import asymmetric_pair
 from .circular import symmetric_circular_pair
 from .meshing import Gearing
 from .pair import TwinScrewPair
+from .pin_cycloid import pin_cycloid_pair
 
 KEYS = frozenset({"profile", "lobes_male", "lobes_female", "centre_distance_mm",
                   "male_diameter_mm", "female_diameter_mm", "tip_radius_mm", "blow_hole"})
 #: How the blow-hole is spanned (:mod:`.blowhole`).
 BLOW_HOLES = ("cusp-plane", "plane")
-PROFILES = {"circular": symmetric_circular_pair, "line-circle": asymmetric_pair}
+def _pin_cycloid(gearing: Gearing, male_addendum: float, female_addendum: float,
+                 tip_radius: float | None):
+    """SRM's asymmetric pin-arc / cycloid profile (:mod:`.pin_cycloid`): its female lies
+    inside the pitch circle and its pin radius is the male's addendum."""
+    if abs(female_addendum) > PITCH_TOL * gearing.centre_distance:
+        g = gearing
+        d2 = 2e3 * (g.r2 + female_addendum)
+        c = d2 * (g.lobes_male + g.lobes_female) / (2 * g.lobes_female)
+        raise CaseError(f"the pin-cycloid female's outer diameter is its pitch diameter "
+                        f"{2e3 * g.r2:.6g} mm, not {d2:.6g} mm: give female_diameter_mm = "
+                        f"{2e3 * g.r2:.6g} or centre_distance_mm = {c:.6g}")
+    if tip_radius is not None:
+        raise CaseError("tip_radius_mm does not apply to the pin-cycloid profile (its pin "
+                        "radius is the male addendum)")
+    return pin_cycloid_pair(gearing, male_addendum)
+
+
+PROFILES = {"circular": symmetric_circular_pair, "line-circle": asymmetric_pair,
+            "pin-cycloid": _pin_cycloid}
+#: A female outer radius this close (per C) to the pitch radius is on it.
+PITCH_TOL = 1e-9
 #: The line-circle rack's default male-tip circle, per the centred one: 10 % smaller
 #: leaves room for the straight flank between the circles.
 LINE_CIRCLE_TIP = 0.9
@@ -57,10 +81,10 @@ def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: flo
     if not hm > 0.0:
         raise CaseError(f"the male diameter {male_diameter * 1e3:.4g} mm is inside its pitch "
                         f"circle ({2e3 * g.r1:.4g} mm): the male has no addendum")
-    if hf < 0.0:
+    if hf < -PITCH_TOL * centre_distance:
         raise CaseError(f"the female diameter {female_diameter * 1e3:.4g} mm is inside its "
                         f"pitch circle ({2e3 * g.r2:.4g} mm)")
-    if tip_radius is None:
+    if tip_radius is None and profile != "pin-cycloid":
         tip_radius = centred_tip_radius(g, hm, hf)
         if profile == "line-circle":
             tip_radius *= LINE_CIRCLE_TIP

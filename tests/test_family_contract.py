@@ -47,6 +47,10 @@ class FamilyContract:
     load_tol: float = 1e-9
     #: Chambers plus rotors against the working area, relative.
     area_tol: float = 1e-9
+    #: Eq. 18 against the chamber's own p-V loop; the residue is the section table's
+    #: resolution (~1e-5 at the default 96 points per period, make bench; 48 leave the
+    #: 3-lobe CRC.60 pair at 1.2e-4).
+    power_tol: float = 1e-4
 
     @pytest.fixture(scope="class")
     @classmethod
@@ -95,10 +99,7 @@ class FamilyContract:
         for name, pair in pairs.items():
             for sweep in _sweeps()[:2]:
                 split = power_split(SweptMachine(pair, sweep), 2.5)
-                # Eq. 18 against the chamber's own p-V loop; the residue is the section
-                # table's resolution (~1e-5 at the default 96 points per period, make
-                # bench; 48 leave the 3-lobe CRC.60 pair at 1.2e-4).
-                assert split.power_balance_error < 1e-4, (name, sweep.kind)
+                assert split.power_balance_error < self.power_tol, (name, sweep.kind)
 
     def test_rotors_pass_lobes_at_one_rate(self, pairs):
         for name, pair in pairs.items():
@@ -142,3 +143,20 @@ class TestTwinScrew(FamilyContract):
     # runs' ends at cuts, 7e-9 of the working area (measured).
     load_tol = 1e-5
     area_tol = 1e-7
+
+
+class TestPinCycloid(TestTwinScrew):
+    """SRM's asymmetric pin-cycloid profile (not among the family's examples, whose
+    tests it would double): its lobes end in sharp corners, so a chamber dies as a wedge
+    (area ~ angle^2, not the smooth profiles' ~ angle^4) and the loads' linear
+    interpolant across that last cell leaves the power balance at 2.6e-4 / 2.2e-4 /
+    1.6e-4 with 48 / 96 / 192 points per period (measured: it converges, slowly)."""
+
+    power_tol = 3e-4
+
+    @pytest.fixture(scope="class")
+    @classmethod
+    def pairs(cls):
+        from rotorflow.geometry.twin_screw.family import build
+
+        return {"pin-cycloid-4-6": build("pin-cycloid", 4, 6, 0.080, 0.100, 0.096)}

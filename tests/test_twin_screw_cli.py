@@ -12,6 +12,9 @@ import pytest
 from .conftest import CASES
 
 GOOD = (CASES / "twin_screw_4_6.toml").read_text()
+#: The same machine on the symmetric circular rack (C = 78 mm), for the rack's errors.
+CIRCULAR = GOOD.replace('profile = "pin-cycloid"', 'profile = "circular"').replace(
+    "centre_distance_mm = 80", "centre_distance_mm = 78")
 
 
 def run(*args, cwd=None):
@@ -41,29 +44,34 @@ def test_geometry_of_the_4_6_machine():
 
 
 BAD = {
-    "no female lobes": (GOOD.replace("lobes_female = 6", "lobes_female = 0"), "lobe"),
+    "no female lobes": (CIRCULAR.replace("lobes_female = 6", "lobes_female = 0"), "lobe"),
     # a 5-lobe male on the 4/6 diameters: the rack's tip circle cuts back into the flank
-    "undercut rack": (GOOD.replace("lobes_male = 4", "lobes_male = 5"), "undercut"),
-    "negative wrap": (GOOD.replace("wrap_male_deg = 325", "wrap_male_deg = -10"),
+    "undercut rack": (CIRCULAR.replace("lobes_male = 4", "lobes_male = 5"), "undercut"),
+    "negative wrap": (CIRCULAR.replace("wrap_male_deg = 325", "wrap_male_deg = -10"),
                       "must not be negative"),
-    "two wraps": (GOOD.replace("wrap_male_deg = 325", "wrap_male_deg = 325\nwrap_female_deg = 217"),
-                  "exactly one"),
-    "bores apart": (GOOD.replace("centre_distance_mm = 78", "centre_distance_mm = 99"),
+    "two wraps": (CIRCULAR.replace("wrap_male_deg = 325",
+                                   "wrap_male_deg = 325\nwrap_female_deg = 217"), "exactly one"),
+    "bores apart": (CIRCULAR.replace("centre_distance_mm = 78", "centre_distance_mm = 99"),
                     "bores do not meet"),
-    "male inside its pitch circle": (GOOD.replace("male_diameter_mm = 100",
+    "male inside its pitch circle": (CIRCULAR.replace("male_diameter_mm = 100",
                                                   "male_diameter_mm = 62"), "addendum"),
-    "unknown profile": (GOOD.replace('profile = "circular"', 'profile = "sigma"'),
+    "unknown profile": (CIRCULAR.replace('profile = "circular"', 'profile = "sigma"'),
                         "unknown twin-screw profile"),
-    "internal-gear key": (GOOD.replace("[machine]", "[machine]\nlambda = 1.4"), "lambda"),
-    "driven rotor unknown": (GOOD.replace('driven = "male"', 'driven = "inner"'), "driven"),
-    "unknown blow-hole": (GOOD.replace("[machine]", '[machine]\nblow_hole = "sphere"'),
+    "internal-gear key": (CIRCULAR.replace("[machine]", "[machine]\nlambda = 1.4"), "lambda"),
+    "driven rotor unknown": (CIRCULAR.replace('driven = "male"', 'driven = "inner"'), "driven"),
+    "unknown blow-hole": (CIRCULAR.replace("[machine]", '[machine]\nblow_hole = "sphere"'),
                           "blow_hole"),
+    "pin-cycloid female off its pitch circle": (
+        GOOD.replace("centre_distance_mm = 80", "centre_distance_mm = 78"), "pitch diameter"),
+    "pin-cycloid with a tip radius": (
+        GOOD.replace("[machine]", "[machine]\ntip_radius_mm = 5"), "does not apply"),
 }
 
 
 @pytest.mark.parametrize("name", list(BAD))
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, name):
     text, word = BAD[name]
+    assert text not in (GOOD, CIRCULAR)  # the edit took
     case = tmp_path / "case.toml"
     case.write_text(text)
     before = sorted(tmp_path.iterdir())

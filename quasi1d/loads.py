@@ -62,6 +62,9 @@ class RotorLoads:
     fy: np.ndarray
     torque: np.ndarray  # N m, shaft torque: the rotor's on the gas, ccw positive
     axial: np.ndarray | None  # N, +z towards the high-pressure end; None: undefined
+    #: of which on the end faces (constant: discharge less suction pressure on the
+    #: rotor's section; the rest acts on the flanks, where the chambers meet the rotor)
+    axial_end: float | None = None
 
     @property
     def radial(self) -> np.ndarray:
@@ -134,7 +137,7 @@ def fold(table, theta: np.ndarray, period: float, ks: np.ndarray, gauge: np.ndar
         fluid_torque = load(f"torque_{name}_m3")
         rotors.append(RotorLoads(name, float(ratio), load(f"force_{name}_x_m2"),
                                  load(f"force_{name}_y_m2"), -fluid_torque,
-                                 _axial(table, name, fluid_torque, dp_end_face)))
+                                 *_axial(table, name, fluid_torque, dp_end_face)))
     return tuple(rotors)
 
 
@@ -163,16 +166,17 @@ def _gauge_pressures(model, theta: np.ndarray, p: np.ndarray, age_end: float):
     return ks, g
 
 
-def _axial(table, name: str, fluid_torque: np.ndarray, dp: float) -> np.ndarray | None:
-    """Axial gas force on the rotor: on the flanks (axial_per_torque times the fluid's
-    torque, :func:`rotorflow.geometry.summary._rotor_loads`) plus the end faces:
-    discharge pressure on the high-pressure end face, suction on the low-pressure one,
-    pushing towards the suction end.  None where the table leaves either undefined."""
+def _axial(table, name: str, fluid_torque: np.ndarray, dp: float):
+    """(axial gas force on the rotor, its end-face part): seed 004 separates the two.  On
+    the flanks: axial_per_torque times the fluid's torque
+    (:func:`rotorflow.geometry.summary._rotor_loads`); on the end faces: discharge
+    pressure on the high-pressure end face, suction on the low-pressure one, pushing
+    towards the suction end.  (None, None) where the table leaves either undefined."""
     k = table.rotor_scalars.get(f"axial_per_torque_{name}_per_m")
     area = table.rotor_scalars.get(f"end_area_{name}_m2")
     if k is None or area is None:
-        return None
-    return k * fluid_torque - dp * area
+        return None, None
+    return k * fluid_torque - dp * area, -dp * area
 
 
 def fine_traces(result: SimulationResult) -> dict:

@@ -7,7 +7,9 @@ efficiencies there are indicated):
     mechanical_loss_W           bearing and seal friction (:mod:`.mechanical`)
     adiabatic_efficiency_shaft  mass flow * isentropic work / shaft power
     loads                       per rotor (``rotors``): radial gas force mean and max (N),
-                                axial gas force mean and max |F| (N; None where undefined),
+                                axial gas force mean and max |F| (N; None where undefined)
+                                and, after seed 004, its end-face part and the flanks'
+                                mean,
                                 shaft torque mean, min, max (N m; the rotor's torque on the
                                 gas, counter-clockwise positive) and its sign changes per
                                 lobe period (seed 004: a rotor whose gas torque changes
@@ -49,6 +51,11 @@ def rotor_figures(loads: GasLoads, r: RotorLoads) -> dict:
         "radial_force_N_max": float(radial.max()),
         "axial_force_N_mean": None if r.axial is None else loads.mean(r.axial),
         "axial_force_N_max_abs": None if r.axial is None else float(np.abs(r.axial).max()),
+        # seed 004's split: the end faces' part, and the flanks' (the gas force where the
+        # chambers meet the rotor) as the rest
+        "axial_end_force_N": r.axial_end,
+        "axial_flank_force_N_mean": None if r.axial is None
+        else loads.mean(r.axial) - r.axial_end,
         "torque_Nm_mean": loads.mean(r.torque),
         "torque_Nm_min": float(r.torque.min()),
         "torque_Nm_max": float(r.torque.max()),

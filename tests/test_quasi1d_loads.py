@@ -107,6 +107,21 @@ def test_shaft_figures_of_the_default_case(default):
     assert fig["loads"]["rotors"]["inner"]["axial_force_N_mean"] < 0.0
 
 
+def test_axial_force_splits_into_end_faces_and_flanks(default):
+    """Seed 004 separates the end force from the gas force on the flanks: the end face
+    (the inner rotor's section, Green's theorem on its profile) carries the pressure
+    difference between the plates."""
+    tab, op, res = default
+    case = load_case(CASES / "default.toml")
+    inner = next(r for r in case.pair.rotors if r.name == "inner")
+    rotor = res.figures["loads"]["rotors"]["inner"]
+    dp = op.p_discharge_Pa - op.p_suction_Pa
+    assert rotor["axial_end_force_N"] == pytest.approx(-dp * abs(inner.profile.area),
+                                                       rel=1e-9)
+    assert rotor["axial_end_force_N"] + rotor["axial_flank_force_N_mean"] == pytest.approx(
+        rotor["axial_force_N_mean"], rel=1e-12)
+
+
 def _one_rotor(radial_N, axial_N, omega):
     theta = np.linspace(0.0, 1.0, 5)
     ones = np.ones_like(theta)

@@ -263,6 +263,40 @@ def test_cutters_at_a_helical_oblique_angle(pair_case, tmp_path):
                                     "male_cutter.csv", "male_cutter.json"]
 
 
+def test_cutter_with_a_front_angle(pair_case, tmp_path):
+    # Seed 004: a disc cutter "with non-zero degree front angle": its cutting edge is the
+    # tool's section by the rake plane, d = R_max sin(angle) from the axis; at the tool's
+    # outermost point the edge lies R_max cos(angle) from the plane's foot.
+    angle = 8.0
+    section = {"formats": ["cutter"], "tolerance_um": TOL * 1e6,
+               "cutter_front_angle_deg": angle}
+    man = export(pair_case, Export.from_section(section), tmp_path)
+    for name in ("male", "female"):
+        axial = np.loadtxt(tmp_path / f"{name}_cutter.csv", delimiter=",", skiprows=1)
+        rake = np.loadtxt(tmp_path / f"{name}_cutter_rake.csv", delimiter=",", skiprows=1)
+        side = json.loads((tmp_path / f"{name}_cutter.json").read_text())
+        r_max = axial[:, 1].max()
+        d = r_max * math.sin(math.radians(angle))
+        assert side["rake_offset_m"] * 1e3 == pytest.approx(d, rel=1e-9)
+        assert rake[:, 1].max() == pytest.approx(r_max * math.cos(math.radians(angle)),
+                                                 abs=1e-8)
+        assert np.all(rake[:, 1] < axial[:, 1])
+        assert side["rake_round_trip_max_m"] <= TOL
+        assert man["files"][f"{name}_cutter_rake.csv"]["rake_round_trip_max_m"] <= TOL
+
+
+def test_a_front_angle_past_the_tool_root_is_refused(pair_case, tmp_path):
+    with pytest.raises(CaseError, match="between -45 and 45"):
+        Export.from_section({"formats": ["cutter"], "cutter_front_angle_deg": 50.0})
+    # a small tool (60 mm from the male's axis: radii ~10 to ~29 mm): a plane 0.5 R_max
+    # from its axis passes beside its smallest circles
+    section = {"formats": ["cutter"], "tolerance_um": TOL * 1e6,
+               "cutter_centre_distance_mm": {"male": 60.0}, "cutter_front_angle_deg": 30.0}
+    with pytest.raises(CaseError, match="rake plane"):
+        export(pair_case, Export.from_section(section), tmp_path)
+    assert not any(tmp_path.glob("male_cutter_rake.csv"))
+
+
 def test_round_trip_fails_on_a_perturbed_tool(pair_case):
     pair = pair_case.pair
     curve = pair.female

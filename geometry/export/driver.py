@@ -306,6 +306,39 @@ def _cutter(out: Path, asm: Assembly, part: Part, unit: str, scale: float) -> di
         "tolerance_m": tol,
         "units": unit,
     }
+    files = {f"{name}_cutter.csv": {"points": int(len(cut.u)), **rt}}
+    if asm.settings.cutter_front_angle_rad:
+        rake = _rake(out, name, curve, cut, asm.settings.cutter_front_angle_rad, tol, unit,
+                     scale)
+        side.update(rake)
+        files[f"{name}_cutter_rake.csv"] = rake
     (out / f"{name}_cutter.json").write_text(json.dumps(side, indent=2) + "\n")
-    return {f"{name}_cutter.csv": {"points": int(len(cut.u)), **rt},
-            f"{name}_cutter.json": {}}
+    return {**files, f"{name}_cutter.json": {}}
+
+
+def _rake(out: Path, name: str, curve, cut, angle: float, tol: float, unit: str,
+          scale: float) -> dict:
+    """The cutting edge of a disc cutter with front (rake) angle ``angle``: the tool's
+    section by a plane parallel to its axis, ``d = R_max sin(angle)`` from it, through
+    the tool's outermost point.  A tool circle of radius R meets the plane at
+    ``s = sqrt(R^2 - d^2)`` from the plane's foot; written, read back and turned about
+    the axis again (R = sqrt(s^2 + d^2)) it must regenerate the rotor as the axial
+    section does."""
+    from .cutter import round_trip
+
+    d = float(np.max(cut.radius)) * math.sin(angle)
+    if float(np.min(cut.radius)) <= abs(d):
+        raise CaseError(f"cutter_front_angle_deg = {math.degrees(angle):g}: the rake plane, "
+                        f"{abs(d) * 1e3:.4g} mm from the {name} cutter's axis, misses its "
+                        f"smallest radius {np.min(cut.radius) * 1e3:.4g} mm")
+    path = out / f"{name}_cutter_rake.csv"
+    s = np.sqrt(cut.radius ** 2 - d * d)
+    np.savetxt(path, np.column_stack([cut.axial, s]) * scale, delimiter=",", comments="",
+               fmt="%.9f", header=f"axial_{unit},rake_{unit}")
+    written = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2) / scale
+    rt = round_trip(curve, cut, written[:, 0], np.hypot(written[:, 1], d))
+    if rt["round_trip_max_m"] > tol:
+        raise CaseError(f"the {name} cutter's rake-face edge regenerates the rotor only to "
+                        f"{rt['round_trip_max_m'] * 1e6:.3g} um (> tolerance_um)")
+    return {"front_angle_deg": math.degrees(angle), "rake_offset_m": d,
+            "rake_round_trip_max_m": rt["round_trip_max_m"]}

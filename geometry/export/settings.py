@@ -48,6 +48,12 @@ Keys (lengths in the unit their name carries; the dataclass holds SI):
     name (``{male = 56, female = -50}``; the twin screw's rotors are of opposite hand,
     so one angle rarely suits both), rotors not named taking the defaults: the rotor's
     helix angle at its pitch radius, and the pair's diameter D.
+``cutter_front_angle_deg`` = 0
+    the disc cutter's front (rake) angle (seed 004): its cutting edge lies in a plane
+    parallel to the tool axis at ``sin(angle)`` times the tool's largest radius from it,
+    so the edge a toolmaker grinds is the tool's section by that plane, written as
+    ``<rotor>_cutter_rake.csv`` (and enveloped back onto the rotor, as the axial one).
+    Between -45 and 45 deg.
 ``cloud_spacing_mm`` = 1
     spacing of the inspection point clouds along the profile and along z.
 ``units`` = "mm"
@@ -64,7 +70,7 @@ from rotorflow.errors import CaseError
 FORMATS = ("stl", "fluid", "step", "dxf", "csv", "ply", "cutter")
 KEYS = ("formats", "tolerance_um", "clearance_um", "clearance_on", "tip_clearance_um",
         "fluid_angle_deg", "bore_diameter_mm", "port_depth_mm", "cutter_setting_angle_deg",
-        "cutter_centre_distance_mm", "cloud_spacing_mm", "units")
+        "cutter_centre_distance_mm", "cutter_front_angle_deg", "cloud_spacing_mm", "units")
 #: A tolerance above this is no longer a tolerance of a rotor of any size here.
 TOLERANCE_MAX_UM = 1000.0
 
@@ -157,6 +163,7 @@ class Export:
     #: one value for every rotor cut, or ((rotor name, value), ...); None: the default
     cutter_setting_angle_rad: float | tuple | None = None
     cutter_centre_distance_m: float | tuple | None = None
+    cutter_front_angle_rad: float = 0.0
     cloud_spacing_m: float = 1e-3
     units: str = "mm"
 
@@ -225,6 +232,15 @@ class Export:
                                                 math.radians, _angle_range),
             cutter_centre_distance_m=_per_rotor(d, "cutter_centre_distance_mm", where,
                                                 lambda v: v * 1e-3, positive=True),
+            cutter_front_angle_rad=math.radians(_front_angle(d, where)),
             cloud_spacing_m=_num(d, "cloud_spacing_mm", where, 1.0, positive=True) * 1e-3,
             units=_choice(d, "units", where, ("mm", "m"), "mm"),
         )
+
+
+def _front_angle(d: dict, where: str) -> float:
+    angle = _num(d, "cutter_front_angle_deg", where, 0.0)
+    if not -45.0 < angle < 45.0:
+        raise CaseError(f"key 'cutter_front_angle_deg' in {_where(where)} must lie between "
+                        f"-45 and 45 deg, got {angle:g}")
+    return angle

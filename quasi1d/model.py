@@ -24,9 +24,12 @@ joined into a network per segment of the period (:mod:`.network`).  With moving 
 (Leakage.wall_motion) the paths declared with moving walls also carry the gas the rotor
 surface drags from the older into the younger chamber: a Couette term of its own, or,
 with the "cfd-calibrated" model and a fit that has a wall term, the fit's drag term, the
-wall speed passed to the correlation.  Ports: suction open from birth to suction_close
-through area_lp, discharge open from discharge_open to death through area_hp; "nozzle"
-ports are flows like the others, "ideal" ports hold the chamber at the plenum pressure
+wall speed passed to the correlation.  With oil injected the leakage is a homogeneous
+gas-oil mixture (Leakage.mixture; :mod:`.oil`): the gas flow falls by 1 / sqrt(1 + X)
+and the oil leaks along, X the upstream node's oil per gas mass.  Ports: suction open
+from birth to suction_close through area_lp, discharge open from discharge_open to death
+through area_hp; "nozzle" ports are flows like the others, "ideal" ports hold the
+chamber at the plenum pressure
 (the port flow is solved from dp/dt = 0 with a weak drift correction).
 
 Accumulators ride along the state (quadratures of the same flows): mass and enthalpy
@@ -40,9 +43,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rotorflow.errors import CaseError
+
 from . import events, flows
 from .chamber import ChamberGeometry
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_Q, ACC_W, AccColumns, Segment, segments
+from .oil import flooded_discharge_T, node_loads, slot_balances
+from .oil import leakage as oil_leakage
 from .paths import resolve
 from .settings import Leakage, Operating, Ports
 
@@ -118,6 +125,8 @@ class ChamberModel:
         a[[ACC_H_SUC, ACC_H_DIS]] = self.m_ref * abs(self.suc.h) + self.e_ref
         a[[ACC_W, ACC_Q]] = self.e_ref
         a[[c.oil_h_in, c.oil_h_out]] = s[3 * n] if self.oil else self.e_ref
+        if c.oil_leaks:
+            a[[c.oil_leak(key) for key in c.leak_keys]] = s[2 * n]
         return s
 
     def atol_scales(self) -> np.ndarray:
@@ -178,19 +187,27 @@ class ChamberModel:
         existed) says nothing about moving walls; it keeps the Couette term."""
         return any(law.drag_in_fit for law in self.laws)
 
-    def path_flows(self, theta: float, y: np.ndarray, seg: Segment, enthalpy: bool = False):
-        """Mass flow (kg/s) along every flow path of ``seg`` (from node ia to node ib;
+    def path_flows(self, theta: float, y: np.ndarray, seg: Segment, enthalpy: bool = False,
+                   oil_flows: bool = False):
+        """Gas mass flow (kg/s) along every flow path of ``seg`` (from node ia to node ib;
         ``seg.names`` names the path of each) for a state y (n_state,) or a batch
         (B, n_state); the leakage paths come first.  With ``enthalpy``: (mass flows,
-        enthalpy flows in W)."""
+        enthalpy flows in W).  With ``oil_flows`` the oil's mass and enthalpy flows along
+        the leakage paths follow (zeros where the leakage carries gas only)."""
         y = np.asarray(y, dtype=float)
-        F, E = self._flows(theta, np.atleast_2d(y), seg)[:2]
+        F, E, *_, Fo, Eo = self._flows(theta, np.atleast_2d(y), seg)
+        if Fo is None:
+            Fo = np.zeros_like(F[:, :seg.n_leak])
+            Eo = np.zeros_like(Fo)
+        out = (F, E) if enthalpy else (F,)
+        out += (Fo, Eo) if oil_flows else ()
         if y.ndim == 1:
-            F, E = F[0], E[0]
-        return (F, E) if enthalpy else F
+            out = tuple(o[0] for o in out)
+        return out if len(out) > 1 else out[0]
 
     def _flows(self, theta: float, y: np.ndarray, seg: Segment):
-        """Mass and enthalpy flows of every path, with the slot states they came from."""
+        """Gas mass and enthalpy flows of every path, with the slot states they came
+        from, then the leakage's oil mass and enthalpy flows (None, None: gas only)."""
         na, fl = seg.n_act, self.fluid
         n = self.n
         B = y.shape[0]
@@ -231,13 +248,16 @@ class ChamberModel:
                                                        grp.k_factor / S[:, c], v, rr)
         F = S * f * area
         F = np.where(fwd, F, -F)
+        oil_flows = (None, None)
+        if seg.oil is not None:  # a homogeneous gas-oil mixture leaks (see .oil)
+            oil_flows = oil_leakage(seg, F, *node_loads(self, y, m, na))
         if cou is not None:
             # Couette flow: carried from the older (node ib) into the younger chamber (ia)
             F[:, seg.cou] -= cou * R[:, seg.cou_older]
         if seg.walls:
             fwd = F > 0.0  # the walls may carry the flow against the pressure difference
         E = F * np.where(fwd, Wa[2], Wb[2])
-        return F, E, g, m, rho, u, p, T, h
+        return F, E, g, m, rho, u, p, T, h, *oil_flows
 
     def _drag_ratios(self, grp, x, fwd, r1, p1, ra, rb):
         """Wall speed ratios V = U sqrt(rho / p) along the flows of a calibrated group and
@@ -260,7 +280,7 @@ class ChamberModel:
     def rhs(self, theta: float, y: np.ndarray, seg: Segment) -> np.ndarray:
         """dy/dtheta for a batch of states y (B, n_state) inside segment ``seg``."""
         n, na = self.n, seg.n_act
-        F, E, g, m, rho, u, p, T, h = self._flows(theta, y, seg)
+        F, E, g, m, rho, u, p, T, h, Fo, Eo = self._flows(theta, y, seg)
         V, dV, Vt, wall = g[0], g[2], g[3], g[6]
         dy = F @ seg.mm + E @ seg.me + np.abs(F) @ seg.mg
         pdV = p * dV
@@ -283,7 +303,8 @@ class ChamberModel:
         if seg.ideal.size:
             xs = self._ideal_ports(seg, dy, pdV, V, Vt, rho, u, p, h)
         if self.oil:
-            self._oil_out(seg, dy, xs, F, y, m, p, q_oil, w)
+            slot_balances(self, seg, dy, xs, F, None if Fo is None else (Fo, Eo), y, m,
+                          q_oil, w)
         return dy
 
     def _ideal_ports(self, seg, dy, pdV, V, Vt, rho, u, p, h):
@@ -310,24 +331,6 @@ class ChamberModel:
         hx = np.where(x > 0.0, hpl, hc)
         dy += x @ seg.mx + (x * hx) @ seg.mxe
         return x
-
-    def _oil_out(self, seg, dy, xs, F, y, m, p, q_oil, w):
-        """Oil leaves with the gas that flows out through the discharge port."""
-        n, na, c = self.n, seg.n_act, self.acc_cols
-        acc0 = self.nv * n
-        mo = y[:, 2 * n:2 * n + na]
-        Ho = y[:, 3 * n:3 * n + na]
-        out = np.zeros_like(p)
-        if xs is not None:
-            sel = seg.ideal_is_dis
-            out[:, seg.ideal[sel]] = np.maximum(-xs[:, sel], 0.0)
-        if seg.dis_port.size:
-            out[:, seg.ia[seg.dis_port] - 1] += np.maximum(F[:, seg.dis_port], 0.0)
-        frac = out / m
-        dy[:, 2 * n:2 * n + na] = -mo * frac * w
-        dy[:, 3 * n:3 * n + na] = (-q_oil - Ho * frac) * w
-        dy[:, acc0 + c.oil_m_out] = (mo * frac).sum(axis=1) * w
-        dy[:, acc0 + c.oil_h_out] = (Ho * frac).sum(axis=1) * w
 
     # -- observation -----------------------------------------------------------------
     def observe(self, theta: float, y: np.ndarray):
@@ -373,25 +376,6 @@ def _flux(seg: Segment, x, k1, scalar_k: bool):
 
 
 # ---------------------------------------------------------------------------------------
-def _oil_flooded_discharge_T(fluid, suc: Plenum, op: Operating) -> float:
-    """The discharge plenum's temperature with oil injected: gas and oil compressed
-    together without losses, in thermal equilibrium from the moment they mix.
-
-    What flows back from the discharge is that mixture's gas, not gas compressed dry
-    (which, at a pressure ratio of 11, would be ~300 K hotter than what the oil lets
-    out).  With x kg of oil per kg of gas, (cp + x c_oil) dT = v dp gives
-    T2 = T1 (p2 / p1)^(R / (cp + x c_oil)), T1 the adiabatic mixing temperature of
-    gas at suction and oil at injection.
-    """
-    T1g, x, co = op.T_suction_K, op.oil_mass_ratio, op.oil_cp_J_kgK
-    h_lo = fluid.state_pT(op.p_suction_Pa, T1g - 0.5)[2]
-    h_hi = fluid.state_pT(op.p_suction_Pa, T1g + 0.5)[2]
-    cp = float(h_hi - h_lo)
-    R = op.p_suction_Pa / (suc.rho * T1g)
-    T1 = (cp * T1g + x * co * op.oil_temperature_K) / (cp + x * co)
-    return T1 * op.pressure_ratio ** (R / (cp + x * co))
-
-
 def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Ports) -> ChamberModel:
     def plenum(p, T):
         rho, u, h = fluid.state_pT(p, T)
@@ -408,12 +392,15 @@ def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Port
         h_is = suc.h + fluid.work_isentropic(op.p_suction_Pa, op.T_suction_K, op.p_discharge_Pa)
         Td = fluid.T_ph(op.p_discharge_Pa, h_is)
     if op.oil_mass_ratio > 0:
-        Td = _oil_flooded_discharge_T(fluid, suc, op)
+        Td = flooded_discharge_T(fluid, suc, op)
     dis = plenum(op.p_discharge_Pa, Td)
+    if leak.mixture not in Leakage.MIXTURES:
+        raise CaseError(f"leakage mixture {leak.mixture!r} is not one of "
+                        f"{', '.join(Leakage.MIXTURES)}")
     n = geo.slots
     nv = 4 if op.oil_mass_ratio > 0 else 2
     laws = resolve(geo.paths, leak)
-    acc = AccColumns.of(laws)
+    acc = AccColumns.of(laws, oil_leaks=nv == 4 and leak.mixture == "homogeneous")
     segs = tuple(segments(geo, laws, acc, nv, n, ports, suc, dis))
     return ChamberModel(geo, fluid, op, leak, ports, suc, dis, n, nv, laws, acc, segs,
                         suc.rho * geo.v_max, op.p_suction_Pa * geo.v_max,

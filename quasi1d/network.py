@@ -18,7 +18,9 @@ Then the ports: nozzle ports as flows through the port areas, ideal ports as con
 
 State layout: per slot m and U (and with oil its mass and enthalpy), then the
 accumulators: ACC_M_SUC .. ACC_Q, one gross leakage per report key of the paths, and
-the oil's (:class:`AccColumns`).  The accumulators are part of the integrated state, so
+the oil's (:class:`AccColumns`).  Where the leakage carries oil (:mod:`.oil`), each
+segment also maps the leakage flows' oil into the slots' oil states and the oil's
+accumulators (Segment.oil).  The accumulators are part of the integrated state, so
 their number enters the step control: a new report key is a change of every result.
 """
 
@@ -30,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import flows
+from . import flows, oil
 from .chamber import ROW_AREA_HP, ROW_AREA_LP, ChamberGeometry
 
 # Accumulator columns that every machine has (offsets after the slot states)
@@ -40,12 +42,19 @@ ACC_M_SUC, ACC_H_SUC, ACC_M_DIS, ACC_H_DIS, ACC_W, ACC_Q = range(6)
 @dataclass(frozen=True)
 class AccColumns:
     """Accumulator columns: the fixed six, the gross leakage per report key (in the order
-    the paths first name them), then the oil's mass and enthalpy in and out."""
+    the paths first name them), then the oil's mass and enthalpy in and out, and, where
+    the leakage carries oil (``oil_leaks``), the gross oil leakage per report key."""
 
     leak_keys: tuple[str, ...]
+    oil_leaks: bool = False
 
     def leak(self, key: str) -> int:
         return ACC_Q + 1 + self.leak_keys.index(key)
+
+    def oil_leak(self, key: str) -> int:
+        if not self.oil_leaks:
+            raise KeyError(f"no oil leakage accumulators (leakage of gas only): {key!r}")
+        return self.oil_m_in + 4 + self.leak_keys.index(key)
 
     @property
     def oil_m_in(self) -> int:
@@ -65,11 +74,11 @@ class AccColumns:
 
     @property
     def size(self) -> int:
-        return self.oil_m_in + 4
+        return self.oil_m_in + 4 + (len(self.leak_keys) if self.oil_leaks else 0)
 
     @classmethod
-    def of(cls, laws) -> AccColumns:
-        return cls(tuple(dict.fromkeys(law.path.report_key for law in laws)))
+    def of(cls, laws, oil_leaks: bool = False) -> AccColumns:
+        return cls(tuple(dict.fromkeys(law.path.report_key for law in laws)), oil_leaks)
 
 
 @dataclass(frozen=True)
@@ -126,6 +135,7 @@ class Segment:
     mx: np.ndarray = field(repr=False)  # (n_ideal, n_state)
     mxe: np.ndarray = field(repr=False)
     dis_port: np.ndarray = field(repr=False)  # flows that are nozzle discharge ports
+    oil: object = field(default=None, repr=False)  # oil.OilMaps where the leakage carries oil
 
 
 @dataclass(frozen=True)
@@ -267,7 +277,9 @@ def _topology(fr: _Frame, span, na, k_sc, k_do, links) -> Segment:
         bool(cou) or any(g.drag is not None for g in groups),
         mm, me, mg, np.array(ideal, dtype=np.intp), np.where(is_dis, fr.dis.p, fr.suc.p),
         np.where(is_dis, fr.dis.h, fr.suc.h), is_dis, mx, mxe,
-        np.array(dis_port, dtype=np.intp))
+        np.array(dis_port, dtype=np.intp),
+        oil.leak_maps(fr, na, ia[:len(links)], ib[:len(links)], laws) if fr.acc.oil_leaks
+        else None)
 
 
 def _node_map(fr: _Frame, na, node_a, node_b, unit_m, unit_e):

@@ -20,6 +20,13 @@ Definitions (per lobe period = one chamber's cycle, t_P = period / omega_outer):
                                 declares a key); the internal gear's: "interlobe" (every
                                 sealing line between chambers), "lp_face" and "hp_face"
                                 (across the low- and the high-pressure end face)
+    oil_flow_kg_s               net oil supplied: injected at suction closing, less what
+                                leaks into the suction plenum (over a periodic cycle the
+                                oil delivered)
+    oil_leakage_kg_s            gross oil flow per report key, as leakage_kg_s: the oil
+                                that leaks with the gas as a homogeneous mixture
+                                ([leakage] mixture, :mod:`.oil`); 0 where the leakage
+                                carries gas only or no oil is injected
 
 Figures that are undefined (no net delivery) are None so that the JSON stays valid.
 """
@@ -65,6 +72,7 @@ def figures(sol: CycleSolution) -> dict:
         "oil_flow_kg_s": float(a[model.acc_cols.oil_m_in] / t_period),
         "leakage_kg_s": {key: float(a[model.acc_cols.leak(key)] / t_period)
                          for key in model.acc_cols.leak_keys},
+        "oil_leakage_kg_s": _oil_leakage(model, a, t_period),
         "cycles": int(sol.cycles),
         "converged": bool(sol.converged),
         "mass_balance_error": float(sol.mass_closure),
@@ -79,6 +87,12 @@ def figures(sol: CycleSolution) -> dict:
     if not sol.converged:
         out["message"] = sol.message
     return out
+
+
+def _oil_leakage(model, a, t_period) -> dict:
+    c = model.acc_cols
+    return {key: float(a[c.oil_leak(key)] / t_period) if c.oil_leaks else 0.0
+            for key in c.leak_keys}
 
 
 def _mixture_T(model, a, T_gas):

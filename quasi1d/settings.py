@@ -276,7 +276,9 @@ class Leakage:
     wall speed ratio V = U sqrt(rho / p) (U half the tip speed, positive when the drag runs
     from the upstream side) goes into the correlation and no separate Couette term is
     added; at equal pressures the flow is the fit's drag flow, about w rho U h.  A fit
-    without a wall term (w = 0) keeps the separate Couette term.
+    without a wall term (w = 0) keeps the separate Couette term.  ``mixture`` (oil injected):
+    "homogeneous" (default): the gas leaks with its chamber's oil as one mixture, which
+    seals the gaps (:mod:`rotorflow.quasi1d.oil`); "gas": the leakage carries gas only.
 
     Paths.  The chamber table declares the leakage paths (interlobe lines, end faces,
     and a family's tips, blow-holes, ...; see :mod:`rotorflow.geometry.table`).  These
@@ -290,8 +292,8 @@ class Leakage:
 
     The most specific setting wins: the named path's, the kind's, the table's own
     declaration (its gap and model), then this section's.  ``model = "none"`` here seals
-    every path the case file does not open in a sub-table.  ``wall_motion`` and
-    ``viscosity_Pa_s`` hold for all paths.  An unknown key, or a kind or path name the
+    every path the case file does not open in a sub-table.  ``wall_motion``, ``mixture``
+    and ``viscosity_Pa_s`` hold for all paths.  An unknown key, or a kind or path name the
     chamber table does not declare, is an error naming it and the file (the names are
     checked against the table when the model is built: :mod:`rotorflow.quasi1d.paths`).
     """
@@ -306,12 +308,14 @@ class Leakage:
     correlation: object = None  # a quasi1d.calibrated.FlowCoefficientFit
     land_m: float = 1.0e-3
     viscosity_Pa_s: float = 1.8e-5  # air near 300 K
+    mixture: str = "homogeneous"  # with oil injected: gas and oil leak together, or "gas"
     # Overrides, as ((kind or path name, paths.PathSettings), ...) in the file's order
     by_kind: tuple = ()
     by_path: tuple = ()
 
     KEYS = ("gap_um", "model", "coefficient", "zeta", "wall_motion", "correlation", "land_mm",
-            "viscosity_Pa_s")
+            "viscosity_Pa_s", "mixture")
+    MIXTURES = ("homogeneous", "gas")
 
     @classmethod
     def from_section(cls, d: dict, where: str = "the case") -> Leakage:
@@ -324,10 +328,8 @@ class Leakage:
         if model != "none" and gap <= 0:
             raise CaseError(f"key 'gap_um' in [{s}] of {where} must be positive for model "
                             f'"{model}", got {gap}')
-        fit = None
-        if model == "cfd-calibrated":
-            fit = _load_correlation(d, s, where)
-        elif "correlation" in d:
+        fit = _load_correlation(d, s, where) if model == "cfd-calibrated" else None
+        if fit is None and "correlation" in d:
             raise CaseError(f"key 'correlation' in [{s}] of {where} needs model "
                             '"cfd-calibrated"')
         by_kind, by_path = read_overrides(d, where, model, fit)
@@ -340,6 +342,7 @@ class Leakage:
             correlation=fit,
             land_m=_number(d, "land_mm", s, where, 1.0, positive=True) * 1e-3,
             viscosity_Pa_s=_number(d, "viscosity_Pa_s", s, where, 1.8e-5, positive=True),
+            mixture=_choice(d, "mixture", s, where, cls.MIXTURES, "homogeneous"),
             by_kind=tuple(by_kind.items()),
             by_path=tuple(by_path.items()),
         )

@@ -37,7 +37,6 @@ import math
 import numpy as np
 
 from ..planar import TWO_PI
-from .pair import _illinois
 from .regions import FEMALE, GROW, MALE
 
 #: A male piece whose rolling angle varies by less than this (rad) along it meshes all
@@ -55,6 +54,10 @@ BAND_GAUSS = 16
 BAND_SHADOW = 2.0
 #: A node this near a joint's instant (rad) is at the joint: its rate is either arc's.
 JOINT_NODE = 1e-9
+#: Newton's steps for a contact's crossing of the cusp line, and the angle (rad) within
+#: which it is found: the contact's rate is exact, so three or four steps reach 1e-13.
+NEWTON_STEPS = 30
+CROSSING_XTOL = 1e-13
 
 
 def refine(pair, psi: np.ndarray, track):
@@ -147,20 +150,33 @@ def _tip_runs(pair, psi, track):
 
 def _cusp_line_cut(pair, point, rate, psi_j: float, psi_k: float) -> float:
     """The angle between ``psi_j`` and ``psi_k`` at which the contact at ``point``
-    (rate ``rate``) crosses the cusp line; NaN if it does not."""
+    (rate ``rate``) crosses the cusp line; NaN if it does not.  Newton's steps on
+    x(psi) - x_c with the contact's own rate (each trial angle solves the law of
+    gearing near the last contact moved on by its rate), kept in the bracket."""
     xc = pair.cusp[0]
-
-    def f(x):
-        x = float(np.atleast_1d(x)[0])
-        c, _ = pair.contact_near(point + (x - psi_j) * rate, x)
-        return np.array([c[0] - xc])
-
-    fj, fk = point[0] - xc, float(f(psi_k)[0])
-    if fj == 0.0:
+    c_k, _ = pair.contact_near(point + (psi_k - psi_j) * rate, psi_k)
+    lo, hi, f_lo = psi_j, psi_k, point[0] - xc
+    if f_lo == 0.0:
         return psi_j
-    if np.sign(fj) == np.sign(fk):
+    if np.sign(f_lo) == np.sign(c_k[0] - xc):
         return np.nan
-    return _illinois(f, psi_j, psi_k, fj, fk)
+    x, c, dc = psi_j, point, rate
+    for _ in range(NEWTON_STEPS):
+        step = -(c[0] - xc) / dc[0] if dc[0] != 0.0 else np.inf
+        new = x + step
+        if not min(lo, hi) < new < max(lo, hi):
+            new = 0.5 * (lo + hi)  # out of the bracket: bisect
+        if abs(new - x) < CROSSING_XTOL:
+            return float(new)
+        # Sought near the first contact moved on by its rate: within a cell that is
+        # the same contact (a trial far off could find another root of the law).
+        x = new
+        c, dc = pair.contact_near(point + (x - psi_j) * rate, x)
+        if np.sign(c[0] - xc) == np.sign(f_lo):
+            lo = x
+        else:
+            hi = x
+    return float(x)
 
 
 def _breaks(pair, psi):

@@ -13,15 +13,14 @@ such event here has a closed form or a root (:attr:`..section.Track.cuts`):
   belongs to another groove from then on.  The angle is the root of x(psi) - x_c along
   the contact, the law of gearing solved at every trial angle (:meth:`.TwinScrewPair
   .contact_near`);
-* a band: a male arc that is a circle centred on the male pitch circle (the symmetric
-  circular rack puts its female tip circle's centre on the pitch line) lies on its
-  mate along the whole arc at the instant that centre passes the pitch point, and the
-  section's contact jumps from one end of the arc to the other.  The rotors touch
-  along the arc in that transverse plane, a piece of the sealing line no swept point
-  draws: the track carries it as a bridge (3.3 mm each on seed 004's 4/6 circular
-  pair, three or four along the rotor: the 5 % the swept contacts lacked against the
-  rack's contact line).
-
+* a band: a male arc that is a circle centred on the male pitch circle (both racks
+  here put their female tip circle's centre on the pitch line) lies on its mate along
+  the whole arc at the instant that centre passes the pitch point, and the section's
+  contact jumps from one end of the arc to the other.  The rotors touch along the arc
+  in that transverse plane, a piece of the sealing line no swept point draws: the
+  track carries it as a bridge (3.3 mm each on seed 004's 4/6 circular pair, 2.8 mm on
+  the line-circle one, three or four along the rotor: the 5 % the swept contacts
+  lacked against the rack's contact line);
 * a joint: where the contact passes from one arc of the profile to the next its rate
   jumps (the curvature does), so the cubic through the nodes either side must not span
   it; the male angle at which the joint meshes is the arc's own rolling angle there.

@@ -25,6 +25,7 @@ from scipy.optimize import minimize_scalar
 from scipy.signal import fftconvolve
 
 from .family import RotorPair
+from .lines import line_lengths, stretches
 from .section import POINTS_PER_PERIOD, SectionChamber
 from .sweep import Sweep
 
@@ -271,14 +272,19 @@ class SweptMachine:
     def track_lines(self) -> dict[tuple[str, int], np.ndarray]:
         """Lengths of the section's further sealing lines (:class:`.section.Track`),
         keyed by (track name, offset of the chamber beyond), like :attr:`seal_lines`."""
+        return self.track_lines_at(self.curves.phi)
+
+    def track_lines_at(self, phi) -> dict[tuple[str, int], np.ndarray]:
+        """:attr:`track_lines` at any angles ``phi`` (:mod:`.lines`: exact between the
+        ends the family gives)."""
         sec = self.section
+        phi = np.asarray(phi, dtype=float)
         out: dict[tuple[str, int], np.ndarray] = {}
         for track in sec.tracks:
-            lines = self._line_lengths(track.points, sec.contact_rate(track), track.offset,
-                                       track.present)
-            for d, v in lines.items():
-                if d != 0:
-                    out[(track.name, d)] = out.get((track.name, d), 0.0) + v
+            st = stretches(sec.psi, track.points, sec.contact_rate(track), track.present,
+                           track.offset, track.ids, track.cuts, track.bridges)
+            for d, v in line_lengths(st, self.sweep, phi).items():
+                out[(track.name, d)] = out.get((track.name, d), 0.0) + v
         return out
 
     @cached_property
@@ -304,8 +310,14 @@ class SweptMachine:
             out[key] = out.get(key, 0.0) + area
         return out
 
-    def _line_lengths(self, pts, rate, offsets, present=None) -> dict[int, np.ndarray]:
-        """Per offset beyond, the length of the line point ``pts`` sweeps (seal_lines)."""
+    def _line_lengths(self, pts, rate, offsets) -> dict[int, np.ndarray]:
+        """Per offset beyond, the length of the line point ``pts`` sweeps (seal_lines).
+
+        Gauss nodes along z, each booked by the nearest table node: a line's ends are
+        known to half a step.  The tracks' lines (:mod:`.lines`) are exact between the
+        ends the family gives; the lead and trail contacts stay here for now, as the
+        exact integration of a table refined 32 times (the internal gear's) costs
+        seconds on a conical rotor."""
         sec = self.section
         sw = self.sweep
         phi = self.curves.phi
@@ -316,8 +328,6 @@ class SweptMachine:
         ds, dt = sw.dscale(z)[None, :], sw.dtwist(z)[None, :]
         h = sec.psi[1] - sec.psi[0]
         node = np.clip(np.rint((psi - sec.psi[0]) / h).astype(int), 0, len(sec.psi) - 1)
-        if present is not None:
-            alive = alive & present[node]
         c = np.stack([_linear(sec, pts[:, i], psi) for i in (0, 1)], -1)
         dc = np.stack([_linear(sec, rate[:, i], psi) for i in (0, 1)], -1)
         tang = ds[..., None] * c - (s[None, :] * dt)[..., None] * dc

@@ -42,6 +42,15 @@ class Track:
     ids: np.ndarray  # (n,) int
     #: d point / d psi where the family knows it exactly (None: differences of points)
     rates: np.ndarray | None = None
+    #: (n,) per node i, the angle between node i and i + 1 at which whatever changes
+    #: there (the point appears or leaves, its chamber beyond or its identity changes)
+    #: changes, where the family knows it; NaN (or None): halfway, each node's point
+    #: standing for its half step.
+    cuts: np.ndarray | None = None
+    #: (psi, length, offset) of lines across the section: where the point jumps along
+    #: a band of contact (the rotors touch along an arc at that instant), the line the
+    #: swept point misses.
+    bridges: tuple = ()
 
 @dataclass(frozen=True)
 class Opening:

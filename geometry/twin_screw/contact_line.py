@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import brentq
 
 from .meshing import rack_shift
 
@@ -27,6 +28,9 @@ SAMPLES = 4000
 #: Gauss-Legendre nodes and panels per branch (a smooth curve: 1e-10).
 GAUSS_NODES = 8
 GAUSS_PANELS = 16
+#: Parameter tolerance of a branch's end where it leaves the rotors (an arc's parameter
+#: runs over [0, 1]; 1e-14 is rounding).
+EDGE_XTOL = 1e-14
 
 
 def contact_line_length(pair, arcs, sweep, theta: float) -> float:
@@ -53,15 +57,21 @@ def contact_line_length(pair, arcs, sweep, theta: float) -> float:
         k_hi = math.ceil((psi.max() - theta + sweep.wrap) / period) + 1
         for k in range(k_lo, k_hi + 1):
             z = (theta - psi + k * period) / rate
+
+            def z_at(u, k=k, arc=arc, rate=rate):
+                return (theta - rack_shift(arc, np.array([u]))[0][0] / r1 + k * period) / rate
+
             ok = inside & (z >= 0.0) & (z <= sweep.length)
-            for lo, hi in _runs(t, ok, z, sweep.length):
+            for lo, hi in _runs(t, ok, z, z_at, sweep.length):
                 total += _branch_length(pair, arc, lo, hi, rate)
     return total
 
 
-def _runs(t, ok, z, length):
+def _runs(t, ok, z, z_at, length):
     """Parameter intervals where a branch lies on the rotors, their ends placed where z
-    crosses 0 or L (linear between samples; a bore's edge stays at its sample)."""
+    crosses 0 or L (a root of ``z_at``: near the end of an arc whose contact is nearly
+    still, the line runs along z and a chord between samples misplaces that end by
+    ~1e-6 of the line; a bore's edge stays at its sample)."""
     out = []
     idx = np.nonzero(ok)[0]
     if not len(idx):
@@ -71,17 +81,17 @@ def _runs(t, ok, z, length):
         i, j = idx[a], idx[b]
         lo, hi = t[i], t[j]
         if i > 0:
-            lo = _edge(t[i - 1], t[i], z[i - 1], z[i], length, lo)
+            lo = _edge(t[i - 1], t[i], z[i - 1], z[i], z_at, length, lo)
         if j < len(t) - 1:
-            hi = _edge(t[j], t[j + 1], z[j], z[j + 1], length, hi)
+            hi = _edge(t[j], t[j + 1], z[j], z[j + 1], z_at, length, hi)
         out.append((lo, hi))
     return out
 
 
-def _edge(ta, tb, za, zb, length, fallback):
+def _edge(ta, tb, za, zb, z_at, length, fallback):
     for level in (0.0, length):
         if (za - level) * (zb - level) < 0.0:
-            return ta + (level - za) / (zb - za) * (tb - ta)
+            return brentq(lambda u, level=level: z_at(u) - level, ta, tb, xtol=EDGE_XTOL)
     return fallback
 
 

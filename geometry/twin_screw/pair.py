@@ -222,6 +222,14 @@ class TwinScrewPair(RotorPair):
         return point, rate
 
     @cached_property
+    def contact_breaks(self) -> tuple:
+        """Where the contact jumps along a band or turns a joint between arcs
+        (:func:`.track_ends.contact_breaks`)."""
+        from .track_ends import contact_breaks
+
+        return contact_breaks(self)
+
+    @cached_property
     def _foot_grid(self):
         from ..curves import sample
 

@@ -84,6 +84,12 @@ class PointTrace:
             return wa * _perp(a) + wb * _perp(b)
         return -(wa * wa) * a - (wb * wb) * b
 
+    def rolling_angle(self, t):
+        """No rolling angle is given for a point-generated arc (as for a primary arc on a
+        rotor, :class:`.meshing.OnRotor`): the bands and joints of its contact are not
+        bridged (:func:`.track_ends.contact_breaks`)."""
+        return np.full(np.shape(t), np.nan)
+
     def eval(self, t, order: int = 0):
         t = np.asarray(t, dtype=float)
         span = self.angle1 - self.angle0

@@ -257,7 +257,7 @@ class SectionCutter(Boundaries):
         tips = self.rotor_at(rotor, self._rotor_data[rotor].tips, psi)
         # The groove is the one between the two tips its boundary passes (its centroid
         # may lie beyond a tip's ray under a hooked flank).
-        near = cKDTree(rings[0]).query(tips)[0]
+        near = np.min(np.linalg.norm(rings[0][None, :, :] - tips[:, None, :], axis=-1), 1)
         pair = sorted(np.argsort(near)[:2])
         k = pair[1] if (pair[0], pair[1]) == (0, n - 1) and n > 2 else pair[0]
         groove, age = self._groove_age(rotor, _centroid(rings[0]), psi, "", groove=int(k))

@@ -34,13 +34,15 @@ from ..planar import TWO_PI
 from ..section import POINTS_PER_PERIOD, SectionChamber, Track
 from .blowhole import build_openings, openings_of
 from .regions import FEMALE, MALE
+from .track_ends import refine
 
 #: A contact seen from the parts on both its sides is one point: within this (per C).
 SAME_POINT = 1e-6
 #: Sections over one period scanned for the male and female grooves that die together
 #: (any section where they share the bottom cusp will do).
 FEMALE_SHIFT_SCAN = 8
-#: Angles within this (rad) are one section; the memo of cut sections keeps this many.
+#: Angles within this (rad) are one section; the memo of cut sections keeps this many
+#: (a table of 192 points per period and its ports' few dozen more).
 RESIDUE_TOL = 1e-9
 CUT_MEMO = 512
 #: A track point that moves more than this many times its median step between two
@@ -91,8 +93,20 @@ def _scan(pair, points_per_period):
     period = TWO_PI / pair.gearing.lobes_male
     h = period / points_per_period
     psis = -_beta0(pair) + h * np.arange(points_per_period)
-    cutter = pair.cutter
-    return psis, [cutter.cut(float(p)) for p in psis]
+    return psis, [_cut(pair, float(p)) for p in psis]
+
+
+def _cut(pair, residue: float):
+    """The section at ``residue`` (an angle in the period from -beta_0), cut once per
+    pair: the table, the female parts' shift and the ports' chamber polygons ask for
+    many of the same angles."""
+    key = round(residue / RESIDUE_TOL)
+    cuts = pair.cut_memo
+    if key not in cuts:
+        if len(cuts) >= CUT_MEMO:
+            cuts.pop(next(iter(cuts)))
+        cuts[key] = pair.cutter.cut(residue)
+    return cuts[key]
 
 
 def chamber_index(pair, part, psi, shift) -> int:
@@ -147,12 +161,14 @@ def _seals(pair, parts, qs):
             rel = pt - axis
             out.append((q, name, "tip", pt, q2, w * np.array([-rel[1], rel[0]])))
     tol = SAME_POINT * pair.gearing.centre_distance
-    contacts = [(q, c, r) for p, q in zip(parts, qs, strict=True)
+    contacts = [(q, p.rotor, c, r) for p, q in zip(parts, qs, strict=True)
                 for c, r in zip(p.contacts, p.contact_rates, strict=True)]
     booked = set()
-    for i, (q, c, r) in enumerate(contacts):
-        for j, (q2, c2, _) in enumerate(contacts):
+    for i, (q, rotor, c, r) in enumerate(contacts):
+        for j, (q2, rotor2, c2, _) in enumerate(contacts):
             if j != i and q2 != q and np.linalg.norm(c - c2) < tol:
+                if rotor != rotor2:
+                    q, q2 = _lives(pair, c, q, rotor, q2)
                 # A chamber whose parts meet the contact more than once (its male and
                 # female part both end there) has one sealing point there, not two.
                 key = (q, q2, round(c[0] / tol), round(c[1] / tol))
@@ -164,10 +180,34 @@ def _seals(pair, parts, qs):
     return out
 
 
+def _lives(pair, c, q, rotor, q2):
+    """(chamber, chamber beyond) of a contact between a male part (chamber q or q2)
+    and a female part: one within a lens's length of the cusp line.
+
+    The two sides of an interlobe contact are two lives of one groove, the groove on
+    the contact's side of the cusp line: N1 lobe periods apart for a male groove, N2
+    for a female one (a revolution of that rotor).  Near the cusp line the section
+    cannot tell which groove's fluid touches the contact: the grown rotors overlap over
+    a lens ~0.2 mm long either side of it, and the dying groove's sliver (1e-11 m^2 and
+    shrinking like the cube of its distance) vanishes up to a lens early, the next one
+    appears up to a lens late.  So the part on the contact's side is trusted, and the
+    other side is its other life: the chambers then change exactly where the contact
+    crosses the cusp line (:mod:`.track_ends`)."""
+    g = pair.gearing
+    side = MALE if c[0] < pair.cusp[0] else FEMALE
+    n = g.lobes_male if side == MALE else g.lobes_female
+    if rotor == side:
+        return q, q + n if q2 > q else q - n
+    return (q2 + n if q > q2 else q2 - n), q2
+
+
 def _assemble(pair, psi0, ppp, nodes) -> SectionChamber:
     period = TWO_PI / pair.gearing.lobes_male
     h = period / ppp
-    keys = sorted(k for k, v in nodes.items() if v["area"] > 0.0)
+    # The chamber lives where it has fluid or a sealing point: near the cusp line a
+    # newborn or dying sliver is below the polygons' resolution while its contact,
+    # booked to it (_lives), already or still seals.
+    keys = sorted(k for k, v in nodes.items() if v["area"] > 0.0 or v["seals"])
     first, last = keys[0] - 1, keys[-1] + 1  # a zero node either side
     idx = np.arange(first, last + 1)
     n = len(idx)
@@ -175,8 +215,10 @@ def _assemble(pair, psi0, ppp, nodes) -> SectionChamber:
     force = np.array([nodes[k]["force"] if k in nodes else np.zeros((2, 2)) for k in idx])
     torque = np.array([nodes[k]["torque"] if k in nodes else np.zeros(2) for k in idx])
     perim = np.array([nodes[k]["perimeter"] if k in nodes else np.zeros(2) for k in idx])
-    tracks = _tracks([nodes[k]["seals"] if k in nodes else [] for k in idx], n)
     psi = psi0 + h * idx
+    tracks = [refine(pair, psi, t) for t in
+              _tracks([nodes[k]["seals"] if k in nodes else [] for k in idx], n)]
+    tracks = tuple(t for t in tracks if t.present.any())
     openings = build_openings(pair, psi, [nodes[k]["openings"] if k in nodes else []
                                           for k in idx], tracks)
     zero2 = np.zeros((n, 2))
@@ -241,15 +283,9 @@ def chamber_polygons(pair, phi: float, contacts: list | None = None) -> list[np.
     base = -_beta0(pair)
     q = int(np.floor((phi - base) / period + RESIDUE_TOL))
     residue = float(phi - q * period)
-    key = round(residue / RESIDUE_TOL)
-    cuts = pair.cut_memo
-    if key not in cuts:
-        if len(cuts) >= CUT_MEMO:
-            cuts.pop(next(iter(cuts)))
-        cuts[key] = pair.cutter.cut(residue)
     shift = pair.female_shift
     out = []
-    for p in cuts[key]:
+    for p in _cut(pair, residue):
         if chamber_index(pair, p, residue, shift) == q:
             out.extend(p.polygons)
             if contacts is not None:

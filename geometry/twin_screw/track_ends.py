@@ -1,0 +1,233 @@
+"""Where a twin-screw chamber's sealing points begin, end and change hands, exactly.
+
+The section table has a track only at its nodes; a sealing line is the track swept
+along the rotors, so where the track begins or ends between two nodes decides the
+line's length (half a step of wrap, ~1 % of a tip line at 48 nodes per period).  Every
+such event here has a closed form or a root (:attr:`..section.Track.cuts`):
+
+* a tip seals on its bore until it reaches a cusp, where the other bore begins; the
+  tip turns with its rotor at a constant rate, so the angle is a closed form;
+* an interlobe contact changes the chamber beyond it, or leaves the chamber, where it
+  crosses the cusp line x = x_c: the section's fluid is split into male and female
+  groove parts there (:mod:`.regions`), so the part on either side of the contact
+  belongs to another groove from then on.  The angle is the root of x(psi) - x_c along
+  the contact, the law of gearing solved at every trial angle (:meth:`.TwinScrewPair
+  .contact_near`);
+* a band: a male arc that is a circle centred on the male pitch circle (both racks
+  here put their female tip circle's centre on the pitch line) lies on its mate along
+  the whole arc at the instant that centre passes the pitch point, and the section's
+  contact jumps from one end of the arc to the other.  The rotors touch along the arc
+  in that transverse plane, a piece of the sealing line no swept point draws: the
+  track carries it as a bridge (3.3 mm each on seed 004's 4/6 circular pair, 2.8 mm on
+  the line-circle one, three or four along the rotor: the 5 % the swept contacts
+  lacked against the rack's contact line);
+* a joint: where the contact passes from one arc of the profile to the next its rate
+  jumps (the curvature does), so the cubic through the nodes either side must not span
+  it; the male angle at which the joint meshes is the arc's own rolling angle there.
+
+An event with no such form keeps the half step (NaN cut).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..planar import TWO_PI
+from .regions import FEMALE, GROW, MALE
+
+#: A male piece whose rolling angle varies by less than this (rad) along it meshes all
+#: at once: a band (closed forms give ~1e-15; a true flank turns through degrees).
+BAND_TOL = 1e-9
+#: Samples per piece for the band test and the part of a band inside both bores.
+BAND_SAMPLES = 65
+#: Gauss-Legendre nodes for a band's length (an analytic arc: rounding).
+BAND_GAUSS = 16
+#: Nodes this near a band's instant (in units of the angle at which the two circles'
+#: centres are 2 GROW C apart, the grown rotors' overlap) hold the band's middle as
+#: their contact, not the contact: the centres part only like the square of the angle
+#: (both roll on their pitch circles through the pitch point), by C r1 / (2 r2) dpsi^2,
+#: so that angle is sqrt(4 GROW r2 / r1), 3.5e-3 rad for a 4/6 pair; twice it to be safe.
+BAND_SHADOW = 2.0
+#: A node this near a joint's instant (rad) is at the joint: its rate is either arc's.
+JOINT_NODE = 1e-9
+#: Newton's steps for a contact's crossing of the cusp line, and the angle (rad) within
+#: which it is found: the contact's rate is exact, so three or four steps reach 1e-13.
+NEWTON_STEPS = 30
+CROSSING_XTOL = 1e-13
+
+
+def refine(pair, psi: np.ndarray, track):
+    """``track`` with the exact angles of its events and the bridges of its bands."""
+    if track.kind == "tip":
+        return _tip_runs(pair, psi, track)
+    present, offset, ids = track.present.copy(), track.offset, track.ids.copy()
+    cuts = np.full(len(psi), np.nan)
+    bridges = []
+    h = psi[1] - psi[0]
+    for psi_b, length, mid, shadow in _breaks(pair, psi):
+        before = np.nonzero(psi <= psi_b - shadow)[0]
+        after = np.nonzero(psi >= psi_b + shadow)[0]
+        if not (len(before) and len(after)):
+            continue
+        lo, hi = int(before[-1]), int(after[0])
+        if not (present[lo] and present[hi]) or offset[lo] != offset[hi]:
+            continue
+        reach = 0.5 * length + 2.0 * (h + shadow) * np.linalg.norm(track.rates[[lo, hi]],
+                                                                   axis=-1)
+        if np.any(np.linalg.norm(track.points[[lo, hi]] - mid, axis=-1) > reach):
+            continue  # this chamber's contact is elsewhere
+        # The stretches either side end there (no rate is interpolated across), and
+        # nodes in its shadow stand for nothing.
+        cuts[lo] = cuts[hi - 1] = psi_b
+        present[lo + 1:hi] = False
+        ids[hi:] += 1
+        if length > 0.0:
+            bridges.append((float(psi_b), length, int(offset[hi])))
+    change = (present[:-1] != present[1:]) | (present[:-1] & present[1:]
+                                              & (offset[:-1] != offset[1:]))
+    for i in np.nonzero(change & np.isnan(cuts[:-1]))[0]:
+        j, k = (i, i + 1) if present[i] else (i + 1, i)
+        cuts[i] = _cusp_line_cut(pair, track.points[j], track.rates[j], psi[j], psi[k])
+    return dataclasses.replace(track, present=present, ids=ids, cuts=cuts,
+                               bridges=tuple(bridges))
+
+
+def _tip_runs(pair, psi, track):
+    """A tip seals from the cusp where it comes out of the other bore to the cusp where
+    it goes in, and only then: its longest run of nodes, turned out to those cusps.
+
+    Nodes the section's cut saw a little late are filled by turning the tip (just past
+    a cusp the fluid beyond the tip is a sliver below the polygons' resolution), and
+    nodes it saw a little early or astray dropped (a tip a few microns into the other
+    bore, a tip deep in the mesh seen twice by one chamber); a track with no run that
+    covers most of its tip's sealing stretch is no tip line at all."""
+    rotor = FEMALE if "female" in track.name else MALE
+    g = pair.gearing
+    axis = np.zeros(2) if rotor == MALE else g.female_axis
+    speed = 1.0 if rotor == MALE else -g.lobes_male / g.lobes_female
+    xc, yc = pair.cusp
+    cusps = [math.atan2(y - axis[1], xc - axis[0]) for y in (yc, -yc)]
+    n = len(psi)
+    edges = np.diff(np.concatenate([[0], track.present.astype(int), [0]]))
+    starts, stops = np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]
+    if not len(starts):
+        return track
+    k = int(np.argmax(stops - starts))
+    j0, j1 = int(starts[k]), int(stops[k]) - 1
+    ends = []
+    for j in (j0, j1):
+        rel = track.points[j] - axis
+        theta = math.atan2(rel[1], rel[0])
+        ends.append(psi[j] + min((math.remainder(c - theta, TWO_PI) / speed
+                                  for c in cusps), key=abs))
+    inside = (psi >= ends[0]) & (psi <= ends[1])
+    if 2 * (j1 - j0 + 1) < inside.sum():
+        inside[:] = False  # strays, no stretch of a sealing tip
+    # The chamber beyond, as most of the run sees it (a node at a cusp can see a
+    # sliver of the wrong groove there).
+    values, counts = np.unique(track.offset[j0:j1 + 1], return_counts=True)
+    beyond = int(values[np.argmax(counts)])
+    base = track.points[j0] - axis
+    turn = (psi - psi[j0]) * speed
+    spun = np.stack([np.cos(turn) * base[0] - np.sin(turn) * base[1],
+                     np.sin(turn) * base[0] + np.cos(turn) * base[1]], -1)
+    cuts = np.full(n, np.nan)
+    idx = np.nonzero(inside)[0]
+    if len(idx):
+        cuts[max(idx[0] - 1, 0)] = ends[0]
+        cuts[min(idx[-1], n - 1)] = ends[1]
+    return dataclasses.replace(
+        track, points=np.where(inside[:, None], axis + spun, track.points),
+        rates=np.where(inside[:, None], speed * np.stack([-spun[:, 1], spun[:, 0]], -1),
+                       track.rates),
+        present=inside, offset=np.where(inside, beyond, 0),
+        ids=np.zeros(n, dtype=int), cuts=cuts)
+
+
+def _cusp_line_cut(pair, point, rate, psi_j: float, psi_k: float) -> float:
+    """The angle between ``psi_j`` and ``psi_k`` at which the contact at ``point``
+    (rate ``rate``) crosses the cusp line; NaN if it does not.  Newton's steps on
+    x(psi) - x_c with the contact's own rate (each trial angle solves the law of
+    gearing near the last contact moved on by its rate), kept in the bracket."""
+    xc = pair.cusp[0]
+    c_k, _ = pair.contact_near(point + (psi_k - psi_j) * rate, psi_k)
+    lo, hi, f_lo = psi_j, psi_k, point[0] - xc
+    if f_lo == 0.0:
+        return psi_j
+    if np.sign(f_lo) == np.sign(c_k[0] - xc):
+        return np.nan
+    x, c, dc = psi_j, point, rate
+    for _ in range(NEWTON_STEPS):
+        step = -(c[0] - xc) / dc[0] if dc[0] != 0.0 else np.inf
+        new = x + step
+        if not min(lo, hi) < new < max(lo, hi):
+            new = 0.5 * (lo + hi)  # out of the bracket: bisect
+        if abs(new - x) < CROSSING_XTOL:
+            return float(new)
+        # Sought near the first contact moved on by its rate: within a cell that is
+        # the same contact (a trial far off could find another root of the law).
+        x = new
+        c, dc = pair.contact_near(point + (x - psi_j) * rate, x)
+        if np.sign(c[0] - xc) == np.sign(f_lo):
+            lo = x
+        else:
+            hi = x
+    return float(x)
+
+
+def _breaks(pair, psi):
+    """(angle, bridge length, contact point, shadow) of every band and joint that
+    meshes within the table's span ``psi``: one of phase a meshes at a + k period (lobe
+    -k then meets the female where lobe 0 does at a, at the same fixed point)."""
+    period = TWO_PI / pair.gearing.lobes_male
+    out = []
+    for phase, length, point, shadow in pair.contact_breaks:
+        k0 = math.ceil((psi[0] - phase) / period)
+        k1 = math.floor((psi[-1] - phase) / period)
+        out.extend((phase + k * period, length, point, shadow) for k in range(k0, k1 + 1))
+    return out
+
+
+def contact_breaks(pair) -> tuple:
+    """(male angle of contact, bridge length inside both bores, point in the fixed frame
+    at that angle, shadow) of every band and joint of the male's lobe 0 (module
+    docstring); a band's point is its middle."""
+    g = pair.gearing
+    t = np.linspace(0.0, 1.0, BAND_SAMPLES)
+    x, w = np.polynomial.legendre.leggauss(BAND_GAUSS)
+    tg = 0.5 * (x + 1.0)
+    shadow = BAND_SHADOW * math.sqrt(4.0 * GROW * g.r2 / g.r1)
+    out = []
+    pieces = pair.male.pieces
+    for k, piece in enumerate(pieces):
+        rolling = np.asarray(piece.rolling_angle(t), dtype=float)
+        if not np.all(np.isfinite(rolling)):
+            continue
+        if np.ptp(rolling) > BAND_TOL:
+            # A joint with the next arc, unless that one is a band (its instant).
+            nxt = np.asarray(pieces[(k + 1) % len(pieces)].rolling_angle(t), dtype=float)
+            if np.all(np.isfinite(nxt)) and np.ptp(nxt) > BAND_TOL:
+                end = float(rolling[-1])
+                out.append((end, 0.0, piece.eval(np.array([1.0]), 0)[0] @ _turn(end).T,
+                            JOINT_NODE))
+            continue
+        phase = float(rolling.mean())
+        # At that instant the arc lies on its mate in the fixed frame: turned by phase.
+        turn = _turn(phase)
+        pts = piece.eval(tg, 0) @ turn.T
+        # Only what lies in both bores touches (the rotors meet nowhere else).
+        inside = ((np.linalg.norm(pts, axis=-1) <= pair.male_radius * (1.0 + BAND_TOL))
+                  & (np.linalg.norm(pts - g.female_axis, axis=-1)
+                     <= pair.female_radius * (1.0 + BAND_TOL)))
+        length = float(np.sum(0.5 * w * np.linalg.norm(piece.eval(tg, 1), axis=-1) * inside))
+        if length > 0.0:
+            out.append((phase, length, piece.eval(np.array([0.5]), 0)[0] @ turn.T, shadow))
+    return tuple(out)
+
+
+def _turn(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s], [s, c]])

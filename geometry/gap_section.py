@@ -54,6 +54,8 @@ class Wall:
     xy: Callable
     u: np.ndarray
     y_contact: float
+    #: What ends the wall at the first and the last of ``u`` (in messages).
+    span_ends: tuple[str, str] = ("reaches the end of the searched span",) * 2
 
 
 def check_arguments(gap: float, inlet_ratio: float, outlet_ratio: float) -> None:
@@ -93,9 +95,9 @@ def branch(wall: Wall) -> Branch:
     hi = k0
     while hi < len(dx) - 1 and dx[hi + 1] == dx[k0]:
         hi += 1
-    why = ["reaches the end of the searched span" if lo == 0 else
+    why = [wall.span_ends[0] if lo == 0 else
            f"turns back across the gap {1e3 * abs(x[lo]):.3g} mm from the contact",
-           "reaches the end of the searched span" if hi == len(dx) - 1 else
+           wall.span_ends[1] if hi == len(dx) - 1 else
            f"turns back across the gap {1e3 * abs(x[hi + 1]):.3g} mm from the contact"]
     sl = slice(lo, hi + 2)
     u, x, y = u[sl], x[sl], y[sl]

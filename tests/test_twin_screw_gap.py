@@ -238,6 +238,15 @@ def test_angles_and_clearances_without_a_section_are_named_with_the_reason():
         CIRCULAR.gap_walls(math.radians(50), 1.5e-3, clearance_on="female")
     with pytest.raises(CaseError, match="opens only"):
         CIRCULAR.gap_walls(math.radians(50), 500e-6)
+    # The pin-cycloid male's point-generated flanks curve at 36 um near their cusps: 50 um
+    # folds it; on the female the offset land ends at its sharp corners, which the section
+    # reaches at 60 deg before the gap has opened 20-fold.
+    with pytest.raises(CaseError, match=r"male angle 50 deg: .*male rotor folds its profile"):
+        PIN.gap_walls(math.radians(50), 50e-6)
+    PIN.gap_walls(math.radians(50), 50e-6, clearance_on="female")
+    with pytest.raises(CaseError, match=r"male angle 60 deg: .*opens only .*female wall "
+                                        r"reaches a sharp corner of its relieved profile"):
+        PIN.gap_walls(math.radians(60), 50e-6, clearance_on="female")
     with pytest.raises(CaseError, match="positive"):
         CIRCULAR.gap_walls(1.0, 0.0)
     with pytest.raises(CaseError, match="clearance_on"):

@@ -75,7 +75,8 @@ FOOT_STEP = 1e-3
 FOOT_SEEDS = 4
 #: A contact is a band (conformal arcs) where the male stays on the female for one step
 #: of this (per C) of arc length beside it: at a point contact two profiles of relative
-#: curvature k part by k s^2 / 2 = 3e-9 k C^2 there, above ON_FEMALE unless k < 1 / (3 C).
+#: curvature k part by k s^2 / 2 = 5e-7 k C^2 there, above ON_FEMALE = 1e-8 C unless
+#: their relative radius of curvature 1 / k exceeds 50 C (they are then conformal).
 BAND_STEP = 1e-3
 #: Two contacts closer than this (per C) are one (the section table's SAME_POINT).
 SAME_POINT = 1e-6
@@ -258,7 +259,8 @@ def _pick(pair, psi: float, contact: int | None) -> Contact:
 
 
 def _walls(pair, psi, x0, n, t, profiles, ys, spans):
-    """(lower = male, upper = female) :class:`Wall` of ``profiles`` in the frame (x0, n, t)."""
+    """(lower = male, upper = female) :class:`Wall` of ``profiles`` in the frame (x0, n, t);
+    ``spans``: per profile, the parameters searched and what ends them."""
     male, female = profiles
     ang_f = _female_angle(pair, psi)
 
@@ -270,26 +272,28 @@ def _walls(pair, psi, x0, n, t, profiles, ys, spans):
         d = rotate(female.point(u), ang_f) + pair.gearing.female_axis - x0
         return d @ t, d @ n
 
-    return (Wall("male", male_xy, spans[0], ys[0]), Wall("female", female_xy, spans[1], ys[1]))
+    return (Wall("male", male_xy, spans[0][0], ys[0], spans[0][1]),
+            Wall("female", female_xy, spans[1][0], ys[1], spans[1][1]))
 
 
 def _spans(pair, pick: Contact, relieved: str | None):
-    """Parameters searched on each profile around the contact; the relieved profile's stop
-    short of its sharp corners (its normal offset ends there)."""
+    """(parameters, end reasons) searched on each profile around the contact; the relieved
+    profile's stop short of its sharp corners (its normal offset ends there)."""
     out = []
     for name, profile, u0 in (("male", pair.male, pick.u_male),
                               ("female", pair.female, pick.u_female)):
         half = LOBE_SPAN * len(profile.pieces)
         lo, hi = u0 - half, u0 + half
+        ends = ["reaches the end of the searched span"] * 2
+        corner = "reaches a sharp corner of its relieved profile, where the offset ends"
         if name == relieved:
             for uc, _ in _corners(profile):
-                for shift in (-profile.n, 0.0, profile.n):
-                    v = uc + shift
+                for v in (uc - profile.n, uc, uc + profile.n):
                     if u0 < v < hi:
-                        hi = v - JOINT_STEP
+                        hi, ends[1] = v - JOINT_STEP, corner
                     elif lo < v < u0:
-                        lo = v + JOINT_STEP
-        out.append(np.linspace(lo, hi, SEARCH_SAMPLES))
+                        lo, ends[0] = v + JOINT_STEP, corner
+        out.append((np.linspace(lo, hi, SEARCH_SAMPLES), tuple(ends)))
     return out
 
 

@@ -295,10 +295,22 @@ class TwinScrewPair(RotorPair):
                 ((self.gearing.centre_distance, 0.0), self.female_radius))
 
     def gap_walls(self, angle: float, gap: float, **options):
-        raise CaseError("CFD gap sections are not built for the twin-screw family yet")
+        """The interlobe clearance gap at male angle ``angle`` (:mod:`.sealing_gap`):
+        lower wall the male, upper the female; at the contact nearest the pitch point
+        unless ``contact`` (an index, bottom to top) picks another; the clearance on the
+        male unless ``clearance_on="female"``; ``inlet_ratio``, ``outlet_ratio``,
+        ``points`` as for every family."""
+        from .sealing_gap import sealing_gap_walls
 
-    def wall_speeds(self, angle: float, omega_reference: float):
-        raise CaseError("CFD gap sections are not built for the twin-screw family yet")
+        return sealing_gap_walls(self, angle, gap, **options)
+
+    def wall_speeds(self, angle: float, omega_reference: float, **options
+                    ) -> tuple[float, float]:
+        """(male, female) surface speeds along the gap relative to its moving contact,
+        the male turning at ``omega_reference`` (:mod:`.sealing_gap`)."""
+        from .sealing_gap import sealing_wall_speeds
+
+        return sealing_wall_speeds(self, angle, omega_reference, **options)
 
     def figures(self) -> dict:
         from .figures import pair_figures

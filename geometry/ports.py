@@ -39,6 +39,11 @@ from rotorflow.errors import CaseError
 
 from .machine import SweptMachine
 
+#: The discharge ports a case may ask for ([operating] discharge_port): the axial port on
+#: the high-pressure end plate, the radial port in the casing bores (the twin screw's,
+#: :mod:`.twin_screw.radial_port`), or both, whose areas add.
+DISCHARGE_PORTS = ("axial", "radial", "axial+radial")
+
 #: Angles per lobe period at which the chamber section is added to a port, and how many
 #: times more during the split phases near the deep mesh.
 STEP_PER_PERIOD = 24
@@ -186,12 +191,14 @@ def _tip_hulls(prev, cur, scale):
     return out
 
 
-def ports(machine: SweptMachine, timing: PortTiming):
+def ports(machine: SweptMachine, timing: PortTiming, cut_discharge: bool = True):
     """(suction on the lp plate, discharge on the hp plate) as CrossSections.
 
     Each is what the chamber's face section covers while it is open to the port, less
     what it covers while it must be sealed from it: otherwise a chamber just past
-    suction closing would still sit over its own earlier footprints.
+    suction closing would still sit over its own earlier footprints.  Without
+    ``cut_discharge`` (a machine that discharges through its casing only) the discharge
+    is None.
     """
     sec = machine.section
     life = sec.phi_f - sec.phi_i
@@ -199,6 +206,8 @@ def ports(machine: SweptMachine, timing: PortTiming):
     suction = port_region(machine, 0.0, timing.suction_close, "lp", hulls=True)
     sealed = port_region(machine, timing.suction_close, min(life, timing.death), "lp",
                          hulls=True)
+    if not cut_discharge:
+        return _fill_small_holes(suction - sealed), None
     discharge = port_region(machine, timing.discharge_open, timing.death, "hp", hulls=True)
     sealed_hp = port_region(machine, min(wrap, timing.discharge_open), timing.discharge_open,
                             "hp", hulls=True)
@@ -210,18 +219,20 @@ def ports(machine: SweptMachine, timing: PortTiming):
 AREA_STEP_PER_PERIOD = 24
 
 
-def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray):
+def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray,
+               cut_discharge: bool = True):
     """(suction, discharge): the area through which the chamber is open to each port at
     every age of ``ages`` (its face section inside the port), m2.
 
     The chamber's face section is what an end face would offer if the whole plate were
     open; the port is only part of it, so a chamber opening to the discharge port sees
     an area that grows from nothing (seed 004's point: the early-opened port is small at
-    first and throttles the gas).
+    first and throttles the gas).  Without ``cut_discharge`` (no axial discharge port)
+    the discharge areas are zero and that port is not cut.
     """
     from manifold3d import CrossSection, FillRule
 
-    suction, discharge = ports(machine, timing)
+    suction, discharge = ports(machine, timing, cut_discharge)
     sec = machine.section
     sw = machine.sweep
     step = machine.pair.period / AREA_STEP_PER_PERIOD
@@ -231,7 +242,7 @@ def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray):
     for port, shift, face in ((suction, 0.0, 0.0), (discharge, sw.wrap, sw.length)):
         scale = float(sw.scale(face))
         vals = np.zeros(len(grid))
-        for i, age in enumerate(grid):
+        for i, age in enumerate(grid if port is not None else ()):
             polys = [q for q in chamber_section(machine, sec.phi_i + age - shift) if len(q) >= 3]
             if polys:
                 chamber = CrossSection([np.ascontiguousarray(q * scale) for q in polys],

@@ -38,12 +38,17 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
     n_dr = pair.rotor(split.driven).lobes
     phi = cur.phi
     k_max = int(np.argmax(cur.volume))
+    radial = {}  # the radial port's figures, where the case asks for one
     if getattr(pair, "port_areas", False):
         # The chamber meets the end plates long before and after its ports (a twin-screw
         # groove reaches the discharge plate while still filling): the port timing.
         timing = _timing(case, m)
         suction_close = phi[0] + timing.suction_close
         discharge_open = phi[0] + timing.discharge_open
+        if "radial" in _discharge_ports(case):
+            from .twin_screw.radial_port import port_figures, radial_port
+
+            radial = port_figures(radial_port(m, timing))
     else:
         suction_close = phi[np.nonzero(cur.area_lp > 0.0)[0][-1]]
         discharge_open = phi[np.nonzero(cur.area_hp > 0.0)[0][0]]
@@ -73,6 +78,7 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
         "volume_suction_close_m3": float(np.interp(suction_close, phi, cur.volume)),
         "chamber_life_deg": _deg(phi[-1] - phi[0]),
         "volume_ratio": case.volume_ratio,
+        **radial,
     }
 
 
@@ -96,7 +102,8 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     load_columns.update(pair.face_columns(m))
     area_lp, area_hp = cur.area_lp, cur.area_hp
     if getattr(pair, "port_areas", False):
-        area_lp, area_hp = _port_areas(case, m)
+        area_lp, area_hp, parts = _port_areas(case, m)
+        load_columns.update(parts)
     return ChamberTable(
         angle_rad=cur.phi - cur.phi[0],
         volume_m3=cur.volume,
@@ -121,14 +128,32 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     )
 
 
+def _discharge_ports(case) -> tuple[str, ...]:
+    """The discharge ports the case asks for ([operating] discharge_port, checked by the
+    case loader): ("axial",), ("radial",) or ("axial", "radial")."""
+    return tuple(getattr(case, "discharge_port", "axial").split("+"))
+
+
 def _port_areas(case, m: SweptMachine):
-    """The areas open to the ports against age, for a family whose chamber meets an end
-    plate long before the port (the twin screw's grooves reach the discharge plate
-    while still filling): its face section inside the port, not the whole section."""
+    """(suction, discharge, columns): the areas open to the ports against age, for a
+    family whose chamber meets an end plate long before the port (the twin screw's
+    grooves reach the discharge plate while still filling): its face section inside the
+    port, not the whole section.  The discharge is the sum of the ports the case asks
+    for; with a radial port, each part is also a column of its own (area_hp_axial_m2,
+    area_hp_radial_m2), so that reports can show them."""
     from .ports import open_areas
 
     cur = m.curves
-    return open_areas(m, _timing(case, m), cur.phi - cur.phi[0])
+    ages = cur.phi - cur.phi[0]
+    timing = _timing(case, m)
+    kinds = _discharge_ports(case)
+    area_lp, axial = open_areas(m, timing, ages, cut_discharge="axial" in kinds)
+    if "radial" not in kinds:
+        return area_lp, axial, {}
+    from .twin_screw.radial_port import open_area, radial_port
+
+    radial = open_area(radial_port(m, timing), ages)
+    return area_lp, axial + radial, {"area_hp_axial_m2": axial, "area_hp_radial_m2": radial}
 
 
 def _timing(case, m: SweptMachine):

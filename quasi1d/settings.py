@@ -149,6 +149,7 @@ class Operating:
         "oil_mass_ratio", "T_oil_K",
         "oil_cp_J_kgK", "oil_time_constant_ms",
         "driven",  # a geometry key that the case file keeps in [operating]; not used here
+        "discharge_port",  # a geometry key too: the chamber table's area_hp holds the ports
     )
 
     @property

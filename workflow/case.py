@@ -14,6 +14,7 @@ from pathlib import Path
 
 from rotorflow.errors import CaseError
 from rotorflow.geometry.family import RotorPair, family_for, number
+from rotorflow.geometry.ports import DISCHARGE_PORTS
 from rotorflow.geometry.sweep import Sweep
 
 #: [machine] keys of every family; each family adds its own (geometry.family.Family.keys).
@@ -24,7 +25,9 @@ SWEEP_KEYS = {"kind", "wrap_outer_deg", "wrap_bar", "diameter_end_mm", "lead_rat
 #: ratio times the reference rotor's).
 WRAP_KEY = "wrap_{}_deg"
 #: [operating] keys the geometry reads; the quasi-1D stage owns the others.
-OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven"}
+OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven", "discharge_port"}
+#: The families whose casing has a radial discharge port (geometry.twin_screw.radial_port).
+RADIAL_PORT_FAMILIES = ("twin-screw",)
 SECTIONS = {
     "machine", "sweep", "operating", "leakage", "ports", "numerics", "mechanical", "export",
     "outputs", "cfd", "cfd_chamber",
@@ -45,6 +48,9 @@ class Case:
     volume_ratio: float
     driven: str
     raw: dict = field(repr=False, compare=False)
+    #: [operating] discharge_port: which discharge ports the chamber table opens
+    #: (geometry.ports.DISCHARGE_PORTS); "axial", the end-plate port alone, by default.
+    discharge_port: str = "axial"
 
     def sweep(self, life_2d: float) -> Sweep:
         """The sweep law; a wrap given as wrap_bar needs the profile's chamber life."""
@@ -78,7 +84,7 @@ def load_case(path: Path) -> Case:
             raise CaseError(f"unknown section [{name}] in {path}")
     pair, length = _machine(data, path)
     kind, wrap, wrap_bar, scale_end, lead_ratio = _sweep_law(data, path, pair)
-    volume_ratio, driven = _operating(data, path, pair)
+    volume_ratio, driven, discharge_port = _operating(data, path, pair)
     validate_stage_sections(data, path, pair)
     return Case(
         name=path.stem,
@@ -93,6 +99,7 @@ def load_case(path: Path) -> Case:
         volume_ratio=volume_ratio,
         driven=driven,
         raw=data,
+        discharge_port=discharge_port,
     )
 
 
@@ -170,8 +177,9 @@ def _sweep_law(data: dict, path: Path, pair: RotorPair):
     return kind, wrap, wrap_bar, scale_end, lead_ratio
 
 
-def _operating(data: dict, path: Path, pair: RotorPair) -> tuple[float, str]:
-    """The [operating] keys the geometry reads: volume ratio and driven rotor."""
+def _operating(data: dict, path: Path, pair: RotorPair) -> tuple[float, str, str]:
+    """The [operating] keys the geometry reads: volume ratio, driven rotor and the
+    discharge ports."""
     op = data.get("operating", {})
     if not isinstance(op, dict):
         raise CaseError(f"[operating] in {path} must be a table")
@@ -184,7 +192,15 @@ def _operating(data: dict, path: Path, pair: RotorPair) -> tuple[float, str]:
     if driven not in (*names, "auto"):
         raise CaseError(f"driven must be one of {', '.join(repr(n) for n in names)} or "
                         f"'auto' in {where}, got {driven!r}")
-    return volume_ratio, driven
+    port = op.get("discharge_port", "axial")
+    if not isinstance(port, str) or port not in DISCHARGE_PORTS:
+        raise CaseError(f"discharge_port must be one of "
+                        f"{', '.join(repr(k) for k in DISCHARGE_PORTS)} in {where}, got {port!r}")
+    if port != "axial" and pair.family not in RADIAL_PORT_FAMILIES:
+        raise CaseError(f"discharge_port = {port!r} in {where}: a radial port is cut in the "
+                        f"casing bores of a {' or '.join(RADIAL_PORT_FAMILIES)} machine; a "
+                        f"{pair.family} machine discharges through its axial port only")
+    return volume_ratio, driven, port
 
 
 def validate_stage_sections(data: dict, path: Path, pair: RotorPair | None = None) -> None:

@@ -210,10 +210,10 @@ def _has_export(raw: dict) -> str | None:
 
 
 # The port timing keys: a family whose table carries its port areas (the twin screw)
-# cuts the ports where the case opens and closes them.
+# cuts the ports where the case opens and closes them, and those the case asks for.
 GEOMETRY_READS = ("machine", "sweep", "operating.volume_ratio", "operating.driven",
                   "operating.discharge_early_opening_deg", "operating.suction_close_deg",
-                  "operating.discharge_open_deg")
+                  "operating.discharge_open_deg", "operating.discharge_port")
 _IMPL = "rotorflow.workflow.builtin"
 _REPORT = "rotorflow.postprocess.report"
 

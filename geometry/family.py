@@ -20,9 +20,12 @@ quasi-1D model and the CFD cases read only that object.  What a pair offers:
   at a contact, for the CFD gap cases.
 * ``figures()``, ``contact_table(step_deg)``, ``digest()``: the family's own figures, its
   contact points against angle, a short identity for run folders.
-* ``leakage_paths(far_lines, track_lines)``: the named leakage paths its chamber table declares
-  (kind, neighbour or plenum, column, own clearance), which the quasi-1D model builds its
-  flow network from.
+* ``leakage_paths(far_lines, track_lines, opening_areas)``: the named leakage paths its
+  chamber table declares (kind, neighbour or plenum, column, own clearance), which the
+  quasi-1D model builds its flow network from.
+* Optional, with defaults: ``swept_figures(machine)`` and ``face_columns(machine)`` (the
+  family's own figures and end-face columns of the swept pair), ``radial_ports`` and
+  ``radial_port(machine, timing)`` (a discharge port cut in the casing).
 
 A registry maps ``[machine] type`` to a :class:`Family`; :func:`family_for` fails with
 one line that lists the known types.
@@ -64,6 +67,9 @@ class RotorPair(ABC):
     #: The size the family's dimensionless figures are normalised by [m] (an attribute
     #: or field of every pair).
     diameter: float
+    #: Whether the casing can have a radial discharge port ([operating] discharge_port,
+    #: :meth:`radial_port`).
+    radial_ports = False
 
     @property
     @abstractmethod
@@ -120,6 +126,11 @@ class RotorPair(ABC):
     def swept_figures(self, machine) -> dict:
         """The family's own figures of the swept pair (none by default)."""
         return {}
+
+    def radial_port(self, machine, timing):
+        """The radial discharge port of the swept pair for a port timing: an object with
+        ``open_area(ages)`` (m2 against the chamber's age) and ``figures()``."""
+        raise CaseError(f"a {self.family} machine has no radial discharge port")
 
     def face_columns(self, machine) -> dict[str, np.ndarray]:
         """Table columns of the family's own end-face paths (none by default: the

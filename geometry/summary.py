@@ -46,9 +46,7 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
         suction_close = phi[0] + timing.suction_close
         discharge_open = phi[0] + timing.discharge_open
         if "radial" in _discharge_ports(case):
-            from .twin_screw.radial_port import port_figures, radial_port
-
-            radial = port_figures(radial_port(m, timing))
+            radial = pair.radial_port(m, timing).figures()
     else:
         suction_close = phi[np.nonzero(cur.area_lp > 0.0)[0][-1]]
         discharge_open = phi[np.nonzero(cur.area_hp > 0.0)[0][0]]
@@ -150,9 +148,7 @@ def _port_areas(case, m: SweptMachine):
     area_lp, axial = open_areas(m, timing, ages, cut_discharge="axial" in kinds)
     if "radial" not in kinds:
         return area_lp, axial, {}
-    from .twin_screw.radial_port import open_area, radial_port
-
-    radial = open_area(radial_port(m, timing), ages)
+    radial = m.pair.radial_port(m, timing).open_area(ages)
     return area_lp, axial + radial, {"area_hp_axial_m2": axial, "area_hp_radial_m2": radial}
 
 

@@ -26,8 +26,6 @@ SWEEP_KEYS = {"kind", "wrap_outer_deg", "wrap_bar", "diameter_end_mm", "lead_rat
 WRAP_KEY = "wrap_{}_deg"
 #: [operating] keys the geometry reads; the quasi-1D stage owns the others.
 OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven", "discharge_port"}
-#: The families whose casing has a radial discharge port (geometry.twin_screw.radial_port).
-RADIAL_PORT_FAMILIES = ("twin-screw",)
 SECTIONS = {
     "machine", "sweep", "operating", "leakage", "ports", "numerics", "mechanical", "export",
     "outputs", "cfd", "cfd_chamber",
@@ -196,10 +194,9 @@ def _operating(data: dict, path: Path, pair: RotorPair) -> tuple[float, str, str
     if not isinstance(port, str) or port not in DISCHARGE_PORTS:
         raise CaseError(f"discharge_port must be one of "
                         f"{', '.join(repr(k) for k in DISCHARGE_PORTS)} in {where}, got {port!r}")
-    if port != "axial" and pair.family not in RADIAL_PORT_FAMILIES:
-        raise CaseError(f"discharge_port = {port!r} in {where}: a radial port is cut in the "
-                        f"casing bores of a {' or '.join(RADIAL_PORT_FAMILIES)} machine; a "
-                        f"{pair.family} machine discharges through its axial port only")
+    if port != "axial" and not pair.radial_ports:
+        raise CaseError(f"discharge_port = {port!r} in {where}: a {pair.family} machine has no "
+                        "radial discharge port; it discharges through its axial port only")
     return volume_ratio, driven, port
 
 

@@ -81,6 +81,7 @@ class TwinScrewPair(RotorPair):
     section_refinement = 2
     #: The table's port areas are the face sections inside the ports (summary.py).
     port_areas = True
+    radial_ports = True
 
     gearing: Gearing
     male: TwinProfile
@@ -311,6 +312,11 @@ class TwinScrewPair(RotorPair):
         from .sealing_gap import sealing_wall_speeds
 
         return sealing_wall_speeds(self, angle, omega_reference, **options)
+
+    def radial_port(self, machine, timing):
+        from .radial_port import radial_port
+
+        return radial_port(machine, timing)
 
     def figures(self) -> dict:
         from .figures import pair_figures

@@ -111,6 +111,12 @@ class RadialPort:
     def has_window(self, bore: BoreWindow) -> bool:
         return self.opening < self.latest_opening(bore)
 
+    def open_area(self, ages) -> np.ndarray:
+        return open_area(self, ages)
+
+    def figures(self) -> dict:
+        return port_figures(self)
+
 
 def radial_port(machine, timing) -> RadialPort:
     """The radial port of ``machine`` (a swept twin-screw pair) for ``timing``.

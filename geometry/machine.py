@@ -98,6 +98,21 @@ def _linear(section: SectionChamber, values: np.ndarray, x):
     return np.where(ok, out, 0.0)
 
 
+def _swept_width_constant_lead(opening, sweep, phi: np.ndarray) -> np.ndarray:
+    """:func:`_swept_width` at every angle at once where g = L / wrap is constant: the
+    difference of one antiderivative of the width at phi and at phi - wrap (both among
+    the pieces' ends, so the pieces' Gauss sums stay exact)."""
+    lo, hi = float(phi.min()) - sweep.wrap, float(phi.max())
+    bp = np.unique(np.concatenate([opening.breakpoints(lo, hi), phi, phi - sweep.wrap]))
+    x, w = np.polynomial.legendre.leggauss(2)
+    mid, half = 0.5 * (bp[1:] + bp[:-1]), 0.5 * np.diff(bp)
+    pieces = (opening.at(mid[:, None] + half[:, None] * x[None, :]) @ w) * half
+    integral = np.concatenate([[0.0], np.cumsum(pieces)])
+    upper = integral[np.searchsorted(bp, phi)]
+    lower = integral[np.searchsorted(bp, phi - sweep.wrap)]
+    return (upper - lower) * sweep.length / sweep.wrap
+
+
 def _swept_width(opening, sweep, phi: float) -> float:
     """``int_0^wrap w(phi - theta) g(theta) d theta`` (:attr:`SweptMachine.opening_areas`)."""
     bp = opening.breakpoints(phi - sweep.wrap, phi)
@@ -296,7 +311,8 @@ class SweptMachine:
         With theta = twist(z) this is ``int_0^wrap w(phi - theta) g(theta) d theta``,
         g = s dz/d theta; the width is linear between its breakpoints, so two Gauss
         nodes per piece integrate it exactly where g is constant (a constant lead) and
-        to the pieces' second order elsewhere.  A straight sweep has every section alike.
+        to the pieces' second order elsewhere (a constant lead takes every angle at once,
+        from one antiderivative).  A straight sweep has every section alike.
         """
         sw, phi = self.sweep, self.curves.phi
         out: dict[tuple[str, int], np.ndarray] = {}
@@ -305,6 +321,8 @@ class SweptMachine:
             if sw.wrap == 0.0:
                 z, wz = sw.nodes()
                 area = o.at(phi) * float(wz @ sw.scale(z))
+            elif sw.lead_ratio == 1.0 and sw.scale_end == 1.0:
+                area = _swept_width_constant_lead(o, sw, phi)
             else:
                 area = np.array([_swept_width(o, sw, p) for p in phi])
             out[key] = out.get(key, 0.0) + area

@@ -60,7 +60,8 @@ class Opening:
     orifice area, the width integrated over the length (the twin screw's blow-hole in
     the cusp plane).  The width is a function, not node values: the family knows it at
     any angle, and interpolating across the jumps of an opening cut short by a passing
-    lobe would cost an order of convergence."""
+    lobe would cost an order of convergence.  It is piecewise linear, and
+    ``width.breakpoints(a, b)`` gives its pieces' ends in [a, b]."""
 
     name: str
     offset: int

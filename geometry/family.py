@@ -25,7 +25,8 @@ quasi-1D model and the CFD cases read only that object.  What a pair offers:
   quasi-1D model builds its flow network from.
 * Optional, with defaults: ``swept_figures(machine)`` and ``face_columns(machine)`` (the
   family's own figures and end-face columns of the swept pair), ``radial_ports`` and
-  ``radial_port(machine, timing)`` (a discharge port cut in the casing).
+  ``radial_port(machine, timing)`` (a discharge port cut in the casing), ``oil_films(paths)``
+  (the rotor surfaces that shear oil against the casing, :mod:`.films`).
 
 A registry maps ``[machine] type`` to a :class:`Family`; :func:`family_for` fails with
 one line that lists the known types.
@@ -136,6 +137,11 @@ class RotorPair(ABC):
         """Table columns of the family's own end-face paths (none by default: the
         end faces leak to the plena along the chamber's rotor edges)."""
         return {}
+
+    def oil_films(self, paths) -> tuple:
+        """The surfaces that shear an oil film against the casing (:mod:`.films`), given
+        the table's leakage paths (whose clearances they have); none by default."""
+        return ()
 
     def rotor(self, name: str) -> Rotor:
         for r in self.rotors:

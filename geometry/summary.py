@@ -102,6 +102,7 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     if getattr(pair, "port_areas", False):
         area_lp, area_hp, parts = _port_areas(case, m)
         load_columns.update(parts)
+    paths = pair.leakage_paths(far, tracks, openings)
     return ChamberTable(
         angle_rad=cur.phi - cur.phi[0],
         volume_m3=cur.volume,
@@ -118,11 +119,12 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
         diameter_m=pair.diameter,
         seal_far=far,
         machine=pair.family,
-        leakage_paths=pair.leakage_paths(far, tracks, openings),
+        leakage_paths=paths,
         columns=load_columns,
         rotor_names=tuple(r.name for r in pair.rotors),
         speed_ratios=tuple(float(r.speed_ratio) for r in pair.rotors),
         rotor_scalars=rotor_scalars,
+        oil_films=pair.oil_films(paths),
     )
 
 

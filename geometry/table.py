@@ -52,6 +52,11 @@ face the discharge pressure acts on), and ``axial_per_torque_NAME_per_m``, the a
 force of the fluid on the rotor's flanks per unit of the fluid's torque on it (1/m,
 +z from the low- to the high-pressure end); defined for constant lead (straight: 0).
 A table without them (older side-cars, one-chamber test tables) has no gas loads.
+
+Oil films.  ``oil_films`` (optional) lists the rotor surfaces that shear an oil film
+against the casing, each naming the leakage path whose clearance it has
+(:mod:`.films`: a tip film's radial deficits, a face film's polar moment); the quasi-1D
+model turns them into a viscous loss when oil is injected.
 """
 
 from __future__ import annotations
@@ -64,6 +69,8 @@ from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
+
+from .films import film_from_dict
 
 COLUMNS = (
     "angle_rad",
@@ -245,6 +252,8 @@ class ChamberTable:
     """Signed angular speed of each rotor over the reference rotor's."""
     rotor_scalars: dict[str, float] = field(default_factory=dict)
     """end_area_NAME_m2, axial_per_torque_NAME_per_m where defined."""
+    oil_films: tuple = ()
+    """The rotor surfaces that shear an oil film against the casing (:mod:`.films`)."""
 
     @property
     def paths(self) -> tuple[LeakagePath, ...]:
@@ -321,6 +330,8 @@ def write(table: ChamberTable, csv_path: Path) -> None:
     np.savetxt(csv_path, data, delimiter=",", header=",".join(names), comments="", fmt="%.12e")
     side = table.scalars()
     side["leakage_paths"] = [p.to_dict() for p in table.paths]
+    if table.oil_films:
+        side["oil_films"] = [f.to_dict() for f in table.oil_films]
     csv_path.with_suffix(".json").write_text(json.dumps(side, indent=2) + "\n")
 
 
@@ -355,6 +366,10 @@ def read(csv_path: Path) -> ChamberTable:
         except (TypeError, ValueError, AttributeError) as exc:
             raise ValueError(f"chamber table side-car {side}: {exc}") from None
     per_rotor = {k: float(v) for k, v in meta.items() if _ROTOR_SCALAR.fullmatch(k)}
+    try:
+        films = tuple(film_from_dict(f) for f in meta.get("oil_films", ()))
+    except (TypeError, ValueError, AttributeError) as exc:
+        raise ValueError(f"chamber table side-car {side}: {exc}") from None
     return ChamberTable(
         **cols,
         lobes_outer=int(meta["lobes_outer"]),
@@ -368,6 +383,7 @@ def read(csv_path: Path) -> ChamberTable:
         rotor_names=tuple(str(n) for n in meta.get("rotor_names", ())),
         speed_ratios=tuple(float(x) for x in meta.get("speed_ratios", ())),
         rotor_scalars=per_rotor,
+        oil_films=films,
     )
 
 

@@ -27,10 +27,10 @@ torque ``seal_torque_Nm``.  Default 0 (no seal modelled): SKF's radial shaft sea
 give lip-seal friction only as a diagram of power loss against shaft diameter and speed,
 which is not transcribed here; take the torque from the seal maker's data.
 
-Left out: viscous shear of injected oil in the clearances (Couette, mu U^2 A / h).  The
-chamber table gives the lengths of the sealing lines but neither the wetted land areas
-of the tips and end faces nor the sliding speed along each line, so the term would rest
-on invented areas; it is listed under ``not_modelled`` when oil is injected.
+Injected oil: its viscous shear in the rotor-casing clearances is :mod:`.oil_film`'s,
+from the oil's datasheet viscosities given here (``oil_viscosity_40C_cSt``,
+``oil_viscosity_100C_cSt``, ``oil_density_kg_m3``); without them, or on a table that
+declares no oil films, the figures list it under ``not_modelled``.
 """
 
 from __future__ import annotations
@@ -38,6 +38,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from rotorflow.errors import CaseError
 
 from .settings import _check_keys, _number
 
@@ -49,6 +51,9 @@ MU_ANGULAR_CONTACT_SINGLE_ROW = 0.0020
 #: Placeholder bearing bore over the machine diameter, used without ``bearing_bore_mm``:
 #: no source; an order of magnitude for the journal of a rotor of that diameter.
 BORE_FRACTION_DEFAULT = 0.3
+#: Density of a mineral compressor oil at its working temperature (kg/m3); ISO VG 32-68
+#: mineral oils are 0.85-0.88 at 15 C and lose ~0.6 kg/m3 per K.
+OIL_DENSITY = 850.0
 #: Radial bearings per rotor, sharing its radial gas load equally.
 RADIAL_BEARINGS = 2
 
@@ -61,14 +66,26 @@ class Mechanical:
     bearing_mu_axial: float = MU_ANGULAR_CONTACT_SINGLE_ROW
     bearing_bore_m: float | None = None  # None: BORE_FRACTION_DEFAULT * machine diameter
     seal_torque_Nm: float = 0.0
+    oil_viscosity_40C_cSt: float | None = None  # None: no oil-film loss
+    oil_viscosity_100C_cSt: float | None = None
+    oil_density_kg_m3: float = OIL_DENSITY
 
-    KEYS = ("bearing_mu_radial", "bearing_mu_axial", "bearing_bore_mm", "seal_torque_Nm")
+    KEYS = ("bearing_mu_radial", "bearing_mu_axial", "bearing_bore_mm", "seal_torque_Nm",
+            "oil_viscosity_40C_cSt", "oil_viscosity_100C_cSt", "oil_density_kg_m3")
 
     @classmethod
     def from_section(cls, d: dict, where: str = "the case") -> Mechanical:
         s = "mechanical"
         _check_keys(d, cls.KEYS, s, where)
         bore = d.get("bearing_bore_mm")
+        nu = [None if d.get(k) is None else _number(d, k, s, where, positive=True)
+              for k in ("oil_viscosity_40C_cSt", "oil_viscosity_100C_cSt")]
+        if (nu[0] is None) != (nu[1] is None):
+            raise CaseError(f"[{s}] of {where}: give both oil_viscosity_40C_cSt and "
+                            "oil_viscosity_100C_cSt, or neither")
+        if nu[0] is not None and nu[1] >= nu[0]:
+            raise CaseError(f"[{s}] of {where}: oil_viscosity_100C_cSt ({nu[1]}) must be "
+                            f"below oil_viscosity_40C_cSt ({nu[0]}): oil thins as it warms")
         return cls(
             bearing_mu_radial=_number(d, "bearing_mu_radial", s, where, MU_CYLINDRICAL_ROLLER,
                                       nonnegative=True),
@@ -77,7 +94,15 @@ class Mechanical:
             bearing_bore_m=None if bore is None else 1e-3 * _number(
                 d, "bearing_bore_mm", s, where, positive=True),
             seal_torque_Nm=_number(d, "seal_torque_Nm", s, where, 0.0, nonnegative=True),
+            oil_viscosity_40C_cSt=nu[0],
+            oil_viscosity_100C_cSt=nu[1],
+            oil_density_kg_m3=_number(d, "oil_density_kg_m3", s, where, OIL_DENSITY,
+                                      positive=True),
         )
+
+    @property
+    def oil_viscosity_given(self) -> bool:
+        return self.oil_viscosity_40C_cSt is not None
 
     def bore(self, diameter_m: float) -> float:
         return BORE_FRACTION_DEFAULT * diameter_m if self.bearing_bore_m is None \
@@ -96,8 +121,8 @@ class MechanicalLoss:
         return float(sum(self.bearings_W.values()) + self.seal_W)
 
 
-def mechanical_loss(loads, mech: Mechanical, diameter_m: float, omega_driven: float,
-                    oil: bool = False) -> MechanicalLoss:
+def mechanical_loss(loads, mech: Mechanical, diameter_m: float, omega_driven: float
+                    ) -> MechanicalLoss:
     """Bearing and seal losses (W) under ``loads`` (:class:`.loads.GasLoads`) with the
     driven shaft at ``omega_driven`` (rad/s)."""
     d = mech.bore(diameter_m)
@@ -112,8 +137,5 @@ def mechanical_loss(loads, mech: Mechanical, diameter_m: float, omega_driven: fl
         else:
             moment += 0.5 * mech.bearing_mu_axial * loads.mean(np.abs(r.axial)) * d
         bearings[r.name] = float(moment * omega)
-    if oil:
-        missing.append("viscous shear of the injected oil in the clearances (the chamber "
-                       "table gives no wetted land areas or sliding speeds)")
     return MechanicalLoss(bearings, float(mech.seal_torque_Nm * abs(omega_driven)), d,
                           tuple(missing))

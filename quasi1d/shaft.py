@@ -4,7 +4,8 @@ Added to the performance figures (:mod:`.performance`), which keep their meaning
 efficiencies there are indicated):
 
     shaft_power_W               indicated power + mechanical loss, at the driven shaft
-    mechanical_loss_W           bearing and seal friction (:mod:`.mechanical`)
+    mechanical_loss_W           bearing and seal friction (:mod:`.mechanical`) and, with
+                                oil injected, the oil films' shear (:mod:`.oil_film`)
     adiabatic_efficiency_shaft  mass flow * isentropic work / shaft power
     loads                       per rotor (``rotors``): radial gas force mean and max (N),
                                 axial gas force mean and max |F| (N; None where undefined)
@@ -16,7 +17,9 @@ efficiencies there are indicated):
                                 sign rattles in its timing gear), bearing loss (W); and
                                 ``power_balance_error``: |mean sum omega_r T_r / indicated
                                 power - 1|
-    mechanical                  bearing bore used, seal loss, what is not modelled
+    mechanical                  bearing bore used, seal loss, the oil films' loss per
+                                surface with the viscosity and film temperature used and
+                                the discharge heating it would add, what is not modelled
 
 All None when the chamber table carries no gas loads (:func:`.loads.has_loads`).
 """
@@ -29,6 +32,7 @@ import numpy as np
 
 from .loads import GasLoads, RotorLoads, gas_loads
 from .mechanical import Mechanical, mechanical_loss
+from .oil_film import OilFilmLoss, oil_film_loss
 from .result import SimulationResult
 
 SHAFT_KEYS = ("shaft_power_W", "mechanical_loss_W", "adiabatic_efficiency_shaft", "loads",
@@ -71,20 +75,52 @@ def shaft_figures(result: SimulationResult, table, mech: Mechanical) -> tuple[di
     model = result.solution.model
     op = model.op
     omega_driven = 2.0 * math.pi * op.speed_rpm / 60.0
-    loss = mechanical_loss(loads, mech, float(table.diameter_m), omega_driven,
-                           oil=op.oil_mass_ratio > 0.0)
+    loss = mechanical_loss(loads, mech, float(table.diameter_m), omega_driven)
     fig = result.figures
-    shaft = fig["indicated_power_W"] + loss.total_W
+    film, film_figures = _oil_films(result, table, mech, loads)
+    total_loss = loss.total_W + (0.0 if film is None else film.total_W)
+    shaft = fig["indicated_power_W"] + total_loss
     eta = fig["adiabatic_efficiency"]
     rotors = {r.name: {**rotor_figures(loads, r), "bearing_loss_W": loss.bearings_W[r.name]}
               for r in loads.rotors}
     return {
         "shaft_power_W": shaft,
-        "mechanical_loss_W": loss.total_W,
+        "mechanical_loss_W": total_loss,
         # eta_shaft = mdot w_is / P_shaft = eta_indicated * P_indicated / P_shaft
         "adiabatic_efficiency_shaft": None if eta is None or shaft <= 0.0
         else eta * fig["indicated_power_W"] / shaft,
         "loads": {"power_balance_error": loads.power_balance_error, "rotors": rotors},
         "mechanical": {"bearing_bore_m": loss.bore_m, "seal_loss_W": loss.seal_W,
-                       "not_modelled": list(loss.not_modelled)},
+                       **film_figures,
+                       "not_modelled": list(loss.not_modelled) + (
+                           [] if film is None else list(film.not_modelled))},
     }, loads
+
+
+def _oil_films(result: SimulationResult, table, mech: Mechanical, loads: GasLoads):
+    """The oil films' loss (None without injected oil) and its figures."""
+    model = result.solution.model
+    op = model.op
+    if op.oil_mass_ratio <= 0.0:
+        return None, {}
+    if not table.oil_films or not mech.oil_viscosity_given:
+        why = ("the chamber table declares no oil films" if not table.oil_films
+               else "[mechanical] gives no oil viscosities")
+        return OilFilmLoss({}, math.nan, math.nan,
+                           (f"viscous shear of the injected oil in the clearances ({why})",)
+                           ), {}
+    fig = result.figures
+    T_film = 0.5 * (op.oil_temperature_K + fig["discharge_mixture_temperature_K"])
+    gaps = {law.path.name: law.gap_m for law in model.laws}
+    omegas = {r.name: abs(r.speed_ratio * loads.omega_ref) for r in loads.rotors}
+    film = oil_film_loss(table.oil_films, gaps, omegas, float(table.length_m), mech, T_film)
+    # what the shear heat would add to the discharged gas and oil, were it fed back
+    fluid, p_d, T_d = model.fluid, op.p_discharge_Pa, fig["discharge_temperature_K"]
+    cp_gas = fluid.state_pT(p_d, T_d + 0.5)[2] - fluid.state_pT(p_d, T_d - 0.5)[2]
+    capacity = fig["mass_flow_kg_s"] * cp_gas + fig["oil_flow_kg_s"] * op.oil_cp_J_kgK
+    return film, {
+        "oil_film_W": film.by_surface_W,
+        "oil_film_viscosity_Pa_s": film.viscosity_Pa_s,
+        "oil_film_temperature_K": film.temperature_K,
+        "oil_film_heating_K": film.total_W / capacity if capacity > 0.0 else None,
+    }

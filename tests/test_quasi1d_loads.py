@@ -6,6 +6,7 @@ converged cycle (the shafts' mean power is the p dV work), the scaling of the
 friction model with speed, and bad [mechanical] input.
 """
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -13,6 +14,7 @@ import pytest
 
 from rotorflow.errors import CaseError
 from rotorflow.geometry import table as table_io
+from rotorflow.geometry.films import FaceFilm, TipFilm
 from rotorflow.geometry.summary import chamber_table
 from rotorflow.quasi1d import Leakage, Mechanical, Operating, simulate
 from rotorflow.quasi1d.loads import GasLoads, RotorLoads, fold, gas_loads, slots
@@ -159,8 +161,8 @@ def test_friction_is_linear_in_speed_at_given_loads(default, axial):
 
 
 def test_undefined_axial_load_is_reported():
-    loss = mechanical_loss(_one_rotor(800.0, None, 100.0), Mechanical(), 0.1, 100.0, oil=True)
-    assert len(loss.not_modelled) == 2 and "male" in loss.not_modelled[0]
+    loss = mechanical_loss(_one_rotor(800.0, None, 100.0), Mechanical(), 0.1, 100.0)
+    assert len(loss.not_modelled) == 1 and "male" in loss.not_modelled[0]
 
 
 def test_sign_changes_of_a_periodic_torque():
@@ -173,6 +175,10 @@ def test_sign_changes_of_a_periodic_torque():
     ({"bearing_mu": 0.001}, "bearing_mu"),
     ({"bearing_bore_mm": -3.0}, "bearing_bore_mm"),
     ({"seal_torque_Nm": "lots"}, "seal_torque_Nm"),
+    ({"oil_viscosity_40C_cSt": 46.0}, "oil_viscosity_100C_cSt"),
+    ({"oil_viscosity_40C_cSt": 10.0, "oil_viscosity_100C_cSt": 12.0}, "oil_viscosity_100C_cSt"),
+    ({"oil_viscosity_40C_cSt": 46.0, "oil_viscosity_100C_cSt": 6.8,
+      "oil_density_kg_m3": 0.0}, "oil_density_kg_m3"),
 ])
 def test_bad_mechanical_input(tmp_path, section, word):
     with pytest.raises(CaseError, match=word) as err:
@@ -197,3 +203,8 @@ def test_table_keeps_the_loads_through_its_files(default, tmp_path):
     col = tab.columns["torque_outer_m3"]
     np.testing.assert_allclose(back.columns["torque_outer_m3"], col, rtol=1e-12,
                                atol=1e-12 * np.abs(col).max())
+    # ... and the oil films, exactly (JSON keeps a float's 17 digits)
+    films = (TipFilm("outer", "seal-next", 0.05, 0.8, (0.0, 1.0 / 3.0, 2e-3)),
+             FaceFilm("inner", "hp-face", math.pi * 1e-6))
+    table_io.write(replace(tab, oil_films=films), tmp_path / "f.csv")
+    assert table_io.read(tmp_path / "f.csv").oil_films == films

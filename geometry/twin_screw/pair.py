@@ -370,6 +370,11 @@ class TwinScrewPair(RotorPair):
             out.append(radius - float(np.linalg.norm(profile.point(u), axis=-1).min()))
         return out[0], out[1]
 
+    def oil_films(self, paths) -> tuple:
+        from ..films import rotor_films
+
+        return rotor_films(self, paths)
+
     def face_columns(self, machine) -> dict:
         from .leakage import front_lines
 

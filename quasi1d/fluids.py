@@ -52,6 +52,9 @@ def make_fluid(op: Operating, volume_ratio: float):
     if q is not None and (not op.fluid.startswith("CoolProp::") or not 0.0 < q <= 1.0):
         raise CaseError(f"key 'suction_quality' in [operating] must lie in (0, 1] and needs a "
                         f"CoolProp fluid; got {q:g} with fluid {op.fluid!r}")
+    if q is not None and op.oil_mass_ratio > 0:  # flooded_discharge_T assumes a gas
+        raise CaseError("key 'suction_quality' in [operating]: a wet suction with oil "
+                        "injected (oil_mass_ratio) is not modelled")
     if op.perfect_gas:
         return op.constant_cp_gas
     if op.fluid == "air":

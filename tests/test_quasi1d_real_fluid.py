@@ -43,12 +43,6 @@ def _op(raw, **kw):
     return Operating.from_section({**raw, **kw}, "test")
 
 
-def _table_of(op, vr=2.7):
-    return tabulated(op.fluid.split("::")[1], op.p_suction_Pa, op.p_discharge_Pa,
-                     op.T_suction_K, op.wall_temperature_K, op.oil_temperature_K, vr,
-                     op.suction_quality)
-
-
 def _cli(*args):
     return subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", *map(str, args)],
                           capture_output=True, text=True)
@@ -289,6 +283,8 @@ def test_nozzle_formula_is_continuous_through_kappa_one():
     ('fluid = "CoolProp::R134a"', 'fluid = "CoolProp::R9999"', "CoolProp::R9999"),
     ("T_suction_K = 285", "T_suction_K = 285\nsuction_quality = 0.95", "suction_quality"),
     ('fluid = "CoolProp::R134a"', 'fluid = "air"\nsuction_quality = 0.95', "suction_quality"),
+    ("T_suction_K = 285", "T_suction_K = 273.82\nsuction_quality = 0.95\noil_mass_ratio = 2",
+     "suction_quality"),
 ])
 def test_bad_real_fluid_input_exits_2(tmp_path, old, new, word):
     case = tmp_path / "case.toml"

@@ -47,6 +47,7 @@ from rotorflow.errors import CaseError
 
 from . import events, flows
 from .chamber import ChamberGeometry
+from .fluids import suction_given
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_Q, ACC_W, AccColumns, Segment, segments
 from .oil import flooded_discharge_T, node_loads, slot_balances
 from .oil import leakage as oil_leakage
@@ -377,23 +378,29 @@ def _flux(seg: Segment, x, k1, scalar_k: bool):
 
 # ---------------------------------------------------------------------------------------
 def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Ports) -> ChamberModel:
-    def plenum(p, T):
-        rho, u, h = fluid.state_pT(p, T)
+    def plenum(p, T, **given):  # given: q or h of a two-phase real-fluid state
+        rho, u, h = fluid.state_pT(p, T, **given)
         k = fluid.props(np.array([rho]), np.array([u]))[2]
         return Plenum(p, T, rho, u, h, float(np.ravel(k)[0]) if np.ndim(k) else float(k))
 
-    suc = plenum(op.p_suction_Pa, op.T_suction_K)
-    # Discharge plenum gas (what flows back) at the isentropic end temperature of the
-    # pressure ratio: the temperature of gas compressed from suction without losses.
+    wet = suction_given(op)
+    suc = plenum(op.p_suction_Pa, op.T_suction_K, **wet)
+    # Discharge plenum gas (what flows back) at the isentropic end state of the pressure
+    # ratio: the state of gas compressed from suction without losses.
+    dis_h = {}
     if hasattr(fluid, "gamma"):
         g = fluid.gamma
         Td = op.T_suction_K * op.pressure_ratio ** ((g - 1.0) / g)
     else:
-        h_is = suc.h + fluid.work_isentropic(op.p_suction_Pa, op.T_suction_K, op.p_discharge_Pa)
+        h_is = suc.h + fluid.work_isentropic(op.p_suction_Pa, op.T_suction_K,
+                                             op.p_discharge_Pa, **wet)
         Td = fluid.T_ph(op.p_discharge_Pa, h_is)
+        if op.fluid.startswith("CoolProp::"):  # (p, h): fixes a two-phase end state too
+            dis_h = {"h": h_is}
     if op.oil_mass_ratio > 0:
         Td = flooded_discharge_T(fluid, suc, op)
-    dis = plenum(op.p_discharge_Pa, Td)
+        dis_h = {}
+    dis = plenum(op.p_discharge_Pa, Td, **dis_h)
     if leak.mixture not in Leakage.MIXTURES:
         raise CaseError(f"leakage mixture {leak.mixture!r} is not one of "
                         f"{', '.join(Leakage.MIXTURES)}")

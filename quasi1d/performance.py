@@ -36,6 +36,7 @@ from __future__ import annotations
 import math
 
 from .cycle import CycleSolution
+from .fluids import suction_given
 from .network import ACC_H_DIS, ACC_M_DIS, ACC_M_SUC, ACC_Q, ACC_W
 
 
@@ -48,8 +49,9 @@ def figures(sol: CycleSolution) -> dict:
     power = a[ACC_W] / t_period
     rho_s = model.suc.rho
     delivered = mdot > 0
-    w_is = fl.work_isentropic(op.p_suction_Pa, op.T_suction_K, op.p_discharge_Pa)
-    w_it = fl.work_isothermal(op.p_suction_Pa, op.T_suction_K, op.p_discharge_Pa)
+    wet = suction_given(op)  # a wet suction's quality (real fluids)
+    w_is = fl.work_isentropic(op.p_suction_Pa, op.T_suction_K, op.p_discharge_Pa, **wet)
+    w_it = fl.work_isothermal(op.p_suction_Pa, op.T_suction_K, op.p_discharge_Pa, **wet)
     if a[ACC_M_DIS] > 0:
         T_dis = float(fl.T_ph(op.p_discharge_Pa, a[ACC_H_DIS] / a[ACC_M_DIS]))
     else:

@@ -140,14 +140,14 @@ class Operating:
     # of ~13 um droplets in still gas (h = 2 k / d, Nu = 2), or of 50 um ones with
     # h ~ 1.4e4 W/(m2 K) (a spray); 50 um droplets in still gas take 14 ms.
     oil_time_constant_s: float = 1.0e-3
+    suction_quality: float | None = None  # wet suction's vapour mass fraction (CoolProp only)
 
     KEYS = (
         "p_suction_bar", "p_discharge_bar", "T_suction_K", "speed_rpm", "fluid",
         "volume_ratio", "suction_close_deg", "discharge_open_deg", "T_wall_K",
         "discharge_early_opening_deg",
         "heat_transfer_W_m2K", "heat_capacity", "molar_mass_g_mol", "cp_J_kgK",
-        "oil_mass_ratio", "T_oil_K",
-        "oil_cp_J_kgK", "oil_time_constant_ms",
+        "oil_mass_ratio", "T_oil_K", "oil_cp_J_kgK", "oil_time_constant_ms", "suction_quality",
         "driven",  # a geometry key that the case file keeps in [operating]; not used here
         "discharge_port",  # a geometry key too: the chamber table's area_hp holds the ports
     )
@@ -249,6 +249,8 @@ class Operating:
             oil_cp_J_kgK=_number(d, "oil_cp_J_kgK", s, where, 1900.0, positive=True),
             oil_time_constant_s=1e-3 * _number(d, "oil_time_constant_ms", s, where, 1.0,
                                                positive=True),
+            suction_quality=_number(d, "suction_quality", s, where, positive=True)
+            if "suction_quality" in d else None,  # checked by fluids.make_fluid
         )
 
     def check_ideal_gas(self, where: str = "the case") -> None:

@@ -1,0 +1,297 @@
+"""Real fluids across the two-phase dome (issue 14): CoolProp fluids tabulated in
+(ln rho, u) over the range a case can reach, saturation dome included.
+
+The machine is the small internal-gear pair of examples/default.toml (and of
+examples/refrigeration_r134a.toml).  References are independent of the table: CoolProp's
+flash called per state (the chamber model run on it), the equilibrium isentrope integrated
+with CoolProp (the nozzle), difference quotients of the flash (the HEM sound speed).
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import subprocess
+import sys
+
+import CoolProp.CoolProp as CP
+import numpy as np
+import pytest
+
+from rotorflow.quasi1d import Leakage, Numerics, Operating, flows, simulate
+from rotorflow.quasi1d.coolprop_fluid import tabulated
+
+from .conftest import CASES
+
+R134A_CASE = CASES / "refrigeration_r134a.toml"
+SIM = importlib.import_module("rotorflow.quasi1d.simulate")  # the module, not the function
+
+
+@pytest.fixture(scope="module")
+def machine():
+    """Chamber table and settings of the refrigeration example (its machine is
+    examples/default.toml's)."""
+    from rotorflow.geometry.summary import chamber_table
+    from rotorflow.workflow.case import load_case
+
+    case = load_case(R134A_CASE)
+    leak = Leakage.from_section(case.raw["leakage"], str(R134A_CASE))
+    return chamber_table(case), dict(case.raw["operating"]), leak
+
+
+def _op(raw, **kw):
+    return Operating.from_section({**raw, **kw}, "test")
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", *map(str, args)],
+                          capture_output=True, text=True)
+
+
+# --- (a) the refused case runs ---------------------------------------------------------------
+
+def test_r134a_refrigeration_example_runs_superheated_throughout(tmp_path):
+    # The issue's case: CoolProp::R134a, 3 bar / 285 K -> 9 bar, was refused because the
+    # old (rho, T) table crossed the dome.  It must run through the command line and stay
+    # superheated: every chamber state above the saturation temperature of its pressure.
+    out = _cli("simulate", R134A_CASE, "--json", "--traces", tmp_path / "tr")
+    assert out.returncode == 0, out.stderr
+    fig = json.loads(out.stdout)
+    assert fig["converged"]
+    assert fig["mass_balance_error"] < 1e-6 and fig["energy_balance_error"] < 1e-6
+    # Suction density from CoolProp directly: mass flow / volume flow (the table is not
+    # used for the suction plenum).
+    rho_s = CP.PropsSI("Dmass", "P", 3e5, "T", 285.0, "R134a")
+    assert fig["mass_flow_kg_s"] / (fig["suction_volume_flow_L_min"] / 6e4) == pytest.approx(
+        rho_s, rel=1e-12)
+    # Leakage and ideal-port mixing only add entropy: the delivered gas is hotter than the
+    # isentropic end state (323.4 K), and the indicated power exceeds the isentropic one.
+    s1 = CP.PropsSI("Smass", "P", 3e5, "T", 285.0, "R134a")
+    assert fig["discharge_temperature_K"] > CP.PropsSI("T", "P", 9e5, "Smass", s1, "R134a")
+    assert 0.5 < fig["adiabatic_efficiency"] < 1.0
+    tr = np.genfromtxt(tmp_path / "tr" / "chamber_cycle.csv", delimiter=",", names=True)
+    Tsat = np.array([CP.PropsSI("T", "P", p, "Q", 1.0, "R134a") for p in tr["p_Pa"]])
+    assert np.min(tr["T_K"] - Tsat) > 5.0  # superheated by > 5 K everywhere (measured 11.2)
+
+
+# --- (b) the table against CoolProp per state ------------------------------------------------
+
+class DirectCoolProp:
+    """The reference fluid: CoolProp's flash at every state the chamber equations ask for
+    (no table; sound speed from CoolProp's speed_sound, derivatives from its
+    first_partial_deriv).  Single-phase states only: CoolProp raises inside the dome, and
+    the test then fails.  The few direct evaluations are the tabulated fluid's (they call
+    CoolProp already)."""
+
+    def __init__(self, tab):
+        self.tab = tab
+        self.st = CP.AbstractState("HEOS", tab.name)
+
+    def __getattr__(self, name):
+        return getattr(self.tab, name)
+
+    def _each(self, rho, u):
+        rho, u = np.broadcast_arrays(np.asarray(rho, float), np.asarray(u, float))
+        out = np.full((5,) + rho.shape, np.nan)
+        st = self.st
+        for idx in np.ndindex(rho.shape):
+            if np.isfinite(rho[idx]) and np.isfinite(u[idx]):  # NaN: an empty slot
+                st.update(CP.DmassUmass_INPUTS, rho[idx], u[idx])
+                p, a = st.p(), st.speed_sound()
+                out[:, *idx] = (p, st.T(), rho[idx] * a * a / p,
+                                st.first_partial_deriv(CP.iP, CP.iDmass, CP.iUmass),
+                                st.first_partial_deriv(CP.iP, CP.iUmass, CP.iDmass))
+        return out
+
+    def props(self, rho, u):
+        o = self._each(rho, u)
+        return o[0], o[1], o[2]
+
+    def dp(self, rho, u):
+        o = self._each(rho, u)
+        return o[3], o[4]
+
+    def in_range(self, rho, u) -> bool:
+        return True
+
+
+@pytest.mark.parametrize("fluid, point", [
+    ("CoolProp::Air", {"p_suction_bar": 1.0, "p_discharge_bar": 2.6, "T_suction_K": 293.15,
+                       "volume_ratio": 2.0}),
+    ("CoolProp::R134a", {}),
+])
+def test_table_and_direct_coolprop_runs_agree(machine, monkeypatch, fluid, point):
+    # Issue 14: at a superheated point CoolProp air and R134a agree with an independent
+    # reference of the same chamber within 0.5 % in flow and power.  Measured (flow,
+    # power): air 1.7e-5 and 4e-7, R134a 3e-6 and 4e-6; the table's pressure error away
+    # from the dome is ~6e-5 at most (test_interpolation_error_against_the_flash), so
+    # 2e-4 holds with margin and is asserted too: 0.5 % alone would pass a table 100
+    # times worse.
+    table, raw, leak = machine
+    op = _op(raw, fluid=fluid, **point)
+    num = Numerics(rtol=1e-4)
+    tab = simulate(table, op, leak, numerics=num).figures
+    made = {}
+    tabulated_fluid = SIM.make_fluid
+    monkeypatch.setattr(SIM, "make_fluid", lambda op, vr: made.setdefault(
+        "fluid", DirectCoolProp(tabulated_fluid(op, vr))))
+    ref = simulate(table, op, leak, numerics=num).figures
+    assert isinstance(made["fluid"], DirectCoolProp)
+    assert tab["converged"] and ref["converged"]
+    for key in ("mass_flow_kg_s", "indicated_power_W"):
+        assert tab[key] == pytest.approx(ref[key], rel=5e-3), key
+        assert tab[key] == pytest.approx(ref[key], rel=2e-4), key
+
+
+# --- (c) wet compression -----------------------------------------------------------------------
+
+def test_wet_compression_conserves_mass_and_energy(machine):
+    # Suction quality 0.95 at 3 bar: the isentrope ends inside the dome at 9 bar (quality
+    # 0.96), so the whole compression is two-phase, the states the old table refused.
+    table, raw, leak = machine
+    Tsat = CP.PropsSI("T", "P", 3e5, "Q", 0.95, "R134a")
+    res = simulate(table, _op(raw, suction_quality=0.95, T_suction_K=round(Tsat, 2)), leak)
+    fig = res.figures
+    assert fig["converged"], fig.get("message")
+    # the cycle's balances (what enters = what leaves, per cycle) to the issue's 1e-6,
+    # and the Runge-Kutta steps conserve the (m, U) invariants to round-off
+    assert fig["mass_balance_error"] < 1e-6 and fig["energy_balance_error"] < 1e-6
+    assert res.solution.conservation_mass < 1e-11
+    assert res.solution.conservation_energy < 1e-11
+    # The compression is wet: CoolProp's flash of each traced (rho, p) (independent of the
+    # table's T, which is off by up to 0.6 K next to the dome) has a quality in (0.9, 1),
+    # except in suction chambers, where the hot gas leaking in (vapour from 9 bar
+    # throttled to 3 bar is superheated) dries the mixture and superheats it (measured:
+    # 17 of 174 traced states, all at suction pressure, up to 285 K).  So the states cross
+    # the saturation line both ways within a cycle.
+    m = res.machine
+    live = np.isfinite(m["p_Pa"]) & (m["m_kg"] > 0)
+    rho, p = (m["m_kg"] / m["volume_m3"])[live], m["p_Pa"][live]
+    q = np.array([CP.PropsSI("Q", "Dmass", r, "P", pp, "R134a")
+                  for r, pp in zip(rho, p, strict=True)])
+    wet = (q > 0.0) & (q < 1.0)
+    assert np.all(q[wet] > 0.9) and wet.mean() > 0.8
+    assert np.any(~wet) and np.all(p[~wet] < 1.01 * 3e5)
+    # The delivered mixture is wet too: its (p, h) temperature is the saturation one.
+    assert fig["discharge_temperature_K"] == pytest.approx(
+        CP.PropsSI("T", "P", 9e5, "Q", 1.0, "R134a"), abs=1e-6)
+
+
+# --- (d) the table against the flash -------------------------------------------------------------
+
+def _flash_two_phase(st, rho, u):
+    st.update(CP.DmassUmass_INPUTS, rho, u)
+    return st.phase() == CP.iphase_twophase
+
+
+def test_interpolation_error_against_the_flash():
+    # The wet case's table (3 bar, quality 0.95 -> 9 bar): half of it inside the dome.
+    # 3000 random states; a cell counts as crossed by the saturation line when its four
+    # nodes are not all on one side.  Measured at 200 x 200 nodes, seed 1:
+    #   smooth cells, one phase: p 4.0e-5, T 1.2e-5;  two-phase: p 6.2e-5, T 4.1e-6;
+    #   crossed cells (24 states, ~1 %): p 1.2e-3, T 2.1e-3 (the kink of p, cut by the
+    #   bilinear interpolant within one cell).
+    # Bounds: twice the measured maxima, rounded up.  A bilinear interpolant's error is
+    # (h^2 / 8) |f''| in a smooth cell and up to (h / 4) |jump of f'| in a crossed one.
+    Tsat = CP.PropsSI("T", "P", 3e5, "Q", 0.95, "R134a")
+    f = tabulated("R134a", 3e5, 9e5, round(Tsat, 2), round(Tsat, 2), round(Tsat, 2), 2.7, 0.95)
+    st = CP.AbstractState("HEOS", "R134a")
+    rng = np.random.default_rng(1)
+    fx, fu = rng.uniform(0, f.nx - 1, 3000), rng.uniform(0, f.nu - 1, 3000)
+    rho, u = np.exp(f.x0 + fx * f.dx), f.u0 + fu * f.du
+    assert f.in_range(rho, u)
+    p, T, _ = f.props(rho, u)
+    err = {"one": [], "two": [], "kink": []}
+    for n in range(rho.size):
+        i, j = int(fx[n]), int(fu[n])
+        sides = {_flash_two_phase(st, np.exp(f.x0 + (i + a) * f.dx), f.u0 + (j + b) * f.du)
+                 for a in (0, 1) for b in (0, 1)}
+        two = _flash_two_phase(st, rho[n], u[n])
+        key = "kink" if len(sides) > 1 else ("two" if two else "one")
+        err[key].append((p[n] / st.p() - 1.0, T[n] / st.T() - 1.0))
+    e = {k: np.abs(np.array(v)).max(axis=0) for k, v in err.items()}
+    assert len(err["two"]) > 1000 and len(err["kink"]) > 10  # the dome is really sampled
+    assert e["one"][0] < 1e-4 and e["one"][1] < 3e-5
+    assert e["two"][0] < 1.5e-4 and e["two"][1] < 1e-5
+    assert e["kink"][0] < 3e-3 and e["kink"][1] < 5e-3
+
+
+def test_hem_sound_speed_against_the_isentrope():
+    # kappa = rho a^2 / p with a^2 = (dp/drho)_u + p/rho^2 (dp/du)_rho from the tabulated
+    # derivatives, against a^2 = (dp/drho)_s as a difference quotient of CoolProp's
+    # (rho, s) flash: inside the dome (the HEM sound speed, which CoolProp does not give)
+    # and outside.  States at nodes of the table (no interpolation) and mid-cell.
+    f = tabulated("R134a", 3e5, 9e5, 285.0, 285.0, 285.0, 2.7)
+    st = CP.AbstractState("HEOS", "R134a")
+    for p0, q, T0 in ((3e5, 0.95, None), (9e5, 0.6, None), (3e5, None, 285.0),
+                      (9e5, None, 330.0)):
+        st.update(*((CP.PQ_INPUTS, p0, q) if q else (CP.PT_INPUTS, p0, T0)))
+        rho, u, s = st.rhomass(), st.umass(), st.smass()
+        e = 1e-6
+        st.update(CP.DmassSmass_INPUTS, rho * (1 + e), s)
+        pp = st.p()
+        st.update(CP.DmassSmass_INPUTS, rho * (1 - e), s)
+        a2 = (pp - st.p()) / (2 * e * rho)
+        kappa = f.props(np.array([rho]), np.array([u]))[2][0]
+        # measured 3e-6 to 1.7e-5 (the table's error at a node is the flash's and the
+        # difference quotients'); 1e-4 leaves room for the quotients' noise
+        assert kappa == pytest.approx(rho * a2 / p0, rel=1e-4), (p0, q, T0)
+
+
+# --- the flows of two-phase states -------------------------------------------------------------
+
+@pytest.mark.parametrize("p0, q, T0", [(3e5, None, 285.0), (3e5, 0.95, None),
+                                       (9e5, 0.96, None), (3e5, 0.5, None)])
+def test_hem_nozzle_against_the_equilibrium_isentrope(p0, q, T0):
+    # The nozzle formula with the upstream HEM kappa (flows.py) against the homogeneous
+    # equilibrium nozzle itself: G = max over the throat pressure of
+    # rho(p, s0) sqrt(2 (h0 - h(p, s0))), with CoolProp along the isentrope.  Measured:
+    # choked 0.4 % (superheated, quality 0.95), 1.0 % (0.96 at 9 bar), 1.2 % (0.5); at a
+    # back pressure of 0.7 p0 half that.  Bound 1.5 %: a formula that ignored the dome
+    # (the saturated vapour's kappa, 1.06, at quality 0.5) is 4-5 % off and fails.
+    f = tabulated("R134a", 3e5, 9e5, 285.0, 285.0, 285.0, 2.7)
+    st = CP.AbstractState("HEOS", "R134a")
+    st.update(*((CP.PQ_INPUTS, p0, q) if q else (CP.PT_INPUTS, p0, T0)))
+    r0, u0, h0, s0 = st.rhomass(), st.umass(), st.hmass(), st.smass()
+    kappa = f.props(np.array([r0]), np.array([u0]))[2]
+    pt = np.linspace(0.3, 1.0 - 1e-6, 1500) * p0
+    G = np.empty_like(pt)
+    for n, p in enumerate(pt):
+        st.update(CP.PSmass_INPUTS, p, s0)
+        G[n] = st.rhomass() * np.sqrt(2.0 * max(h0 - st.hmass(), 0.0))
+    for x in (0.0, 0.7):
+        exact = G[pt >= x * p0].max()
+        formula = np.sqrt(p0 * r0) * flows.nozzle_psi(np.array([x]), kappa)[0]
+        assert formula == pytest.approx(exact, rel=1.5e-2), x
+
+
+def test_nozzle_formula_is_continuous_through_kappa_one():
+    # The HEM kappa passes through 1 near the saturation line; the formula's k = 1 limit
+    # is the isothermal nozzle, psi^2 = -2 x^2 ln x (choked at x = e^-1/2).
+    x = np.array([0.2, 0.5, 0.9])
+    k = np.ones(3)
+    psi = flows.nozzle_psi(x, k)
+    xe = np.maximum(x, np.exp(-0.5))
+    assert np.all(np.isfinite(psi))
+    assert psi == pytest.approx(np.sqrt(-2.0 * xe**2 * np.log(xe)), rel=1e-5)
+    assert flows.nozzle_psi(x, k * (1 + 1e-3)) == pytest.approx(psi, rel=1e-3)
+
+
+# --- (e) bad input -----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("old, new, word", [
+    ('fluid = "CoolProp::R134a"', 'fluid = "CoolProp::R9999"', "CoolProp::R9999"),
+    ("T_suction_K = 285", "T_suction_K = 285\nsuction_quality = 0.95", "suction_quality"),
+    ('fluid = "CoolProp::R134a"', 'fluid = "air"\nsuction_quality = 0.95', "suction_quality"),
+    ("T_suction_K = 285", "T_suction_K = 273.82\nsuction_quality = 0.95\noil_mass_ratio = 2",
+     "suction_quality"),
+])
+def test_bad_real_fluid_input_exits_2(tmp_path, old, new, word):
+    case = tmp_path / "case.toml"
+    case.write_text(R134A_CASE.read_text().replace(old, new))
+    traces = tmp_path / "traces"
+    out = _cli("simulate", case, "--json", "--traces", traces)
+    assert out.returncode == 2 and out.stdout == ""
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and word in lines[0], out.stderr
+    assert not traces.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["case.toml"]

@@ -247,6 +247,9 @@ class ChamberModel:
                 # S = sqrt(p_up rho_up)
                 f[:, c] = grp.correlation.reduced_flux(f[:, c], 1.0 / x[:, c],
                                                        grp.k_factor / S[:, c], v, rr)
+            elif grp.model == "rarefied":  # f holds the nozzle's: its inertial limit
+                c = grp.flows
+                f[:, c] = grp.rarefied.reduced_flux(f[:, c], x[:, c], p1[:, c], r1[:, c])
         F = S * f * area
         F = np.where(fwd, F, -F)
         oil_flows = (None, None)

@@ -34,6 +34,7 @@ import numpy as np
 
 from . import flows, oil
 from .chamber import ROW_AREA_HP, ROW_AREA_LP, ChamberGeometry
+from .rarefied import RarefiedLaw
 
 # Accumulator columns that every machine has (offsets after the slot states)
 ACC_M_SUC, ACC_H_SUC, ACC_M_DIS, ACC_H_DIS, ACC_W, ACC_Q = range(6)
@@ -93,6 +94,7 @@ class FlowGroup:
     k_factor: float = 0.0  # cfd-calibrated: 24 L mu / h^2
     drag: slice | np.ndarray | None = None  # flows whose walls drag (the fit's wall term)
     drag_in_group: slice | np.ndarray | None = None  # the same, within the group
+    rarefied: RarefiedLaw | None = None  # rarefied
 
 
 @dataclass(frozen=True)
@@ -332,6 +334,8 @@ def _groups(links, laws) -> tuple[FlowGroup, ...]:
             key = ("fanno", law.zeta)
         elif law.model == "cfd-calibrated":
             key = ("cfd-calibrated", id(law.correlation), law.k_factor)
+        elif law.model == "rarefied":
+            key = ("rarefied", law.gap_m, law.land_m, law.path.measure != "length")
         else:
             key = (law.model,)
         keys.setdefault(key, []).append(f)
@@ -347,6 +351,9 @@ def _groups(links, laws) -> tuple[FlowGroup, ...]:
                 "cfd-calibrated", _index(fs), correlation=law.correlation,
                 k_factor=law.k_factor, drag=_index(drag) if drag else None,
                 drag_in_group=_index([fs.index(f) for f in drag]) if drag else None))
+        elif key[0] == "rarefied":
+            groups.append(FlowGroup("rarefied", _index(fs), rarefied=RarefiedLaw(
+                law.gap_m, law.land_m, law.viscosity_Pa_s, law.accommodation, key[3])))
         else:
             groups.append(FlowGroup(key[0], _index(fs)))
     return tuple(groups)

@@ -111,6 +111,7 @@ class PathLaw:
     viscosity_Pa_s: float
     couette: bool  # the walls drag gas along it: a separate Couette flow
     drag_in_fit: bool  # the walls drag gas along it: the CFD fit's own wall term
+    accommodation: float = 1.0  # "rarefied": the walls' momentum accommodation
 
     @property
     def area_factor(self) -> float:
@@ -174,4 +175,4 @@ def _law(path, leak, named, kind) -> PathLaw:
     in_fit = moving and model == "cfd-calibrated" and fit.wall != 0.0
     return PathLaw(path, model, gap, pick("coefficient", None, leak.coefficient),
                    pick("zeta", None, leak.zeta), pick("land_m", None, leak.land_m), fit,
-                   leak.viscosity_Pa_s, moving and not in_fit, in_fit)
+                   leak.viscosity_Pa_s, moving and not in_fit, in_fit, leak.accommodation)

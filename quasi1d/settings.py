@@ -33,61 +33,17 @@ from dataclasses import dataclass
 
 from rotorflow.errors import CaseError
 
+from .keys import _bool, _check_keys, _choice, _number
 from .perfect_gas import PerfectGas
 
 BAR = 1.0e5
 AIR_MOLAR_MASS_G_MOL = 28.97  # seed 001, Table 3
 AIR_CP_J_KGK = 1006.43  # seed 001, Table 3
 
-LEAKAGE_MODELS = ("none", "nozzle", "fanno", "cfd-calibrated")
+LEAKAGE_MODELS = ("none", "nozzle", "fanno", "cfd-calibrated", "rarefied")
 PORT_MODELS = ("ideal", "nozzle")
 HEAT_CAPACITIES = ("temperature", "constant")
 INTEGRATORS = ("auto", "dopri5", "bs3", "ros23", "radau", "bdf")
-
-
-def _number(d: dict, key: str, section: str, where: str, default=None, *, positive=False,
-            nonnegative=False, integer=False):
-    """Read one numeric key; a missing key gives ``default`` (None: required)."""
-    if key not in d:
-        if default is None:
-            raise CaseError(f"missing key '{key}' in [{section}] of {where}")
-        return default
-    v = d[key]
-    if isinstance(v, bool) or not isinstance(v, int | float):
-        raise CaseError(f"key '{key}' in [{section}] of {where} must be a number, got {v!r}")
-    if not math.isfinite(v):
-        raise CaseError(f"key '{key}' in [{section}] of {where} must be finite, got {v!r}")
-    if integer and int(v) != v:
-        raise CaseError(f"key '{key}' in [{section}] of {where} must be an integer, got {v!r}")
-    if positive and v <= 0:
-        raise CaseError(f"key '{key}' in [{section}] of {where} must be positive, got {v!r}")
-    if nonnegative and v < 0:
-        raise CaseError(f"key '{key}' in [{section}] of {where} must not be negative, got {v!r}")
-    return int(v) if integer else float(v)
-
-
-def _choice(d: dict, key: str, section: str, where: str, choices, default):
-    v = d.get(key, default)
-    if not isinstance(v, str) or v not in choices:
-        allowed = ", ".join(f'"{c}"' for c in choices)
-        raise CaseError(
-            f"key '{key}' in [{section}] of {where} must be one of {allowed}, got {v!r}")
-    return v
-
-
-def _bool(d: dict, key: str, section: str, where: str, default: bool) -> bool:
-    v = d.get(key, default)
-    if not isinstance(v, bool):
-        raise CaseError(f"key '{key}' in [{section}] of {where} must be true or false, got {v!r}")
-    return v
-
-
-def _check_keys(d: dict, allowed, section: str, where: str) -> None:
-    if not isinstance(d, dict):
-        raise CaseError(f"[{section}] of {where} must be a table")
-    for k in d:
-        if k not in allowed:
-            raise CaseError(f"unknown key '{k}' in [{section}] of {where}")
 
 
 def check_fluid(name: str, where: str = "the case") -> str:
@@ -282,6 +238,12 @@ class Leakage:
     without a wall term (w = 0) keeps the separate Couette term.  ``mixture`` (oil injected):
     "homogeneous" (default): the gas leaks with its chamber's oil as one mixture, which
     seals the gaps (:mod:`rotorflow.quasi1d.oil`); "gas": the leakage carries gas only.
+    "rarefied" (vacuum pumps): continuum, slip, transition and free-molecular flow in one
+    law (:mod:`rotorflow.quasi1d.rarefied`: Beskok & Karniadakis's unified model along the
+    land ``land_mm``, its free-molecular limit the slot's Clausing transmission
+    probability, in series with the inertial nozzle flux of the same gap), with the gas
+    viscosity ``viscosity_Pa_s`` for the mean free path and the walls' tangential
+    momentum ``accommodation`` coefficient (1: diffuse, the default; 0 < sigma <= 1).
 
     Paths.  The chamber table declares the leakage paths (interlobe lines, end faces,
     and a family's tips, blow-holes, ...; see :mod:`rotorflow.geometry.table`).  These
@@ -295,10 +257,11 @@ class Leakage:
 
     The most specific setting wins: the named path's, the kind's, the table's own
     declaration (its gap and model), then this section's.  ``model = "none"`` here seals
-    every path the case file does not open in a sub-table.  ``wall_motion``, ``mixture``
-    and ``viscosity_Pa_s`` hold for all paths.  An unknown key, or a kind or path name the
-    chamber table does not declare, is an error naming it and the file (the names are
-    checked against the table when the model is built: :mod:`rotorflow.quasi1d.paths`).
+    every path the case file does not open in a sub-table.  ``wall_motion``, ``mixture``,
+    ``viscosity_Pa_s`` and ``accommodation`` hold for all paths.  An unknown key, or a
+    kind or path name the chamber table does not declare, is an error naming it and the
+    file (the names are checked against the table when the model is built:
+    :mod:`rotorflow.quasi1d.paths`).
     """
 
     gap_m: float = 0.0
@@ -312,12 +275,13 @@ class Leakage:
     land_m: float = 1.0e-3
     viscosity_Pa_s: float = 1.8e-5  # air near 300 K
     mixture: str = "homogeneous"  # with oil injected: gas and oil leak together, or "gas"
+    accommodation: float = 1.0  # "rarefied": diffuse walls (machined metal: ~0.9-1)
     # Overrides, as ((kind or path name, paths.PathSettings), ...) in the file's order
     by_kind: tuple = ()
     by_path: tuple = ()
 
     KEYS = ("gap_um", "model", "coefficient", "zeta", "wall_motion", "correlation", "land_mm",
-            "viscosity_Pa_s", "mixture")
+            "viscosity_Pa_s", "mixture", "accommodation")
     MIXTURES = ("homogeneous", "gas")
 
     @classmethod
@@ -346,9 +310,19 @@ class Leakage:
             land_m=_number(d, "land_mm", s, where, 1.0, positive=True) * 1e-3,
             viscosity_Pa_s=_number(d, "viscosity_Pa_s", s, where, 1.8e-5, positive=True),
             mixture=_choice(d, "mixture", s, where, cls.MIXTURES, "homogeneous"),
+            accommodation=_accommodation(d, s, where),
             by_kind=tuple(by_kind.items()),
             by_path=tuple(by_path.items()),
         )
+
+
+def _accommodation(d: dict, section: str, where: str) -> float:
+    """sigma of Maxwell's wall model: the diffusely reflected fraction, in (0, 1]."""
+    a = _number(d, "accommodation", section, where, 1.0, positive=True)
+    if a > 1.0:
+        raise CaseError(f"key 'accommodation' in [{section}] of {where} must be at most 1 "
+                        f"(the diffusely reflected fraction), got {a}")
+    return a
 
 
 def _load_correlation(d: dict, section: str, where: str):

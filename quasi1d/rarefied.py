@@ -1,0 +1,210 @@
+"""Leakage of a rarefied gas: clearance gaps from continuum through slip and transition to
+free-molecular flow (``[leakage] model = "rarefied"``), for vacuum pumps (seed 003: large
+clearances at pressures where the mean free path is no longer small against the gap).
+
+A sealing line is a plane slot: gap h, length l along the line (the table's column), land
+L in the flow direction.  Mean free path and Knudsen number (hard-sphere definition of
+Karniadakis, Beskok & Aluru, *Microflows and Nanoflows*, Springer 2005, Sec. 1.2):
+
+    lambda = mu / p * sqrt(pi R T / 2),        Kn = lambda / h.
+
+Viscous, slip and transition flow: the unified flow model of Beskok & Karniadakis (1999),
+"A model for flows in channels, pipes and ducts at micro and nano scales", Microscale
+Thermophys. Eng. 3, 43-77 (Karniadakis et al. 2005, Sec. 4.2): the local flow rate is
+Poiseuille's times
+
+    R(Kn) = (1 + alpha(Kn) Kn) (1 + 6 s Kn / (1 + Kn)),  s = (2 - sigma) / sigma,
+    alpha(Kn) = alpha_inf (2/pi) atan(alpha1 Kn^beta),   alpha1 = 4, beta = 0.4,
+
+sigma the tangential momentum accommodation coefficient (1: diffuse walls).  The flow is
+isothermal at the upstream temperature and fully developed along the land; integrated
+along it with the local Kn = c / p (c = lambda p is constant), the mass flow is
+
+    m_v = h^3 l / (12 mu R T L) * int_{p2}^{p1} p R(c / p) dp,
+
+which is the compressible Poiseuille flow h^3 l (p1^2 - p2^2) / (24 mu R T L) for Kn -> 0,
+its first-order slip correction (1 + 6 s Kn) at the mean pressure for small Kn, and for
+Kn -> oo tends to 7 alpha_inf c h^3 l (p1 - p2) / (12 mu R T L): a free-molecular flow
+proportional to the pressure difference.  Its integrand is positive, so m_v rises with p1
+and falls with p2 everywhere (no Knudsen minimum can make the flow run backwards), and it
+changes sign with (p1, p2).
+
+Free-molecular limit.  Beskok & Karniadakis fix alpha_inf = 64 / (15 pi) for a channel
+without ends, whose free-molecular flow in truth grows without bound (as ln Kn); a land of
+finite L / h has a finite one, the transmission probability W(L/h) of the slot times the
+effusion flux (Clausing 1932, Ann. Phys. 12, 961; Berman 1965, J. Appl. Phys. 36, 3356):
+
+    m_fm = W h l (p1 - p2) / sqrt(2 pi R T).
+
+Here alpha_inf = 12 W L / (7 pi h) makes the model's limit exactly that (for diffuse
+walls; with sigma < 1 it scales by (1 + 6 s) / 7 as in Beskok & Karniadakis).  W comes
+from Clausing's integral equation for the slot between two diffuse plates, solved by
+Nystrom's method (:func:`slot_transmission`; checked in the tests by a test-particle
+Monte Carlo simulation).
+
+Inertia.  At higher pressures and pressure ratios the gas accelerates into the gap and the
+flow is limited by inertia, the isentropic nozzle flux m_i of the same gap
+(:mod:`.flows`).  The two resistances act in series, the pressure drop split into a
+viscous part linear in the flow and an inertial part quadratic in it (the laminar channel
+with entry and exit losses):  m / m_v + w (m / m_i)^2 = 1, so
+
+    m = 2 m_v / (1 + sqrt(1 + 4 w (m_v / m_i)^2)),
+
+smooth and below both m_v and m_i; m -> m_v at low Reynolds number, m -> m_i at high.  The
+inertial term is a continuum effect: it is weighted by w = 1 / (1 + Kn) at the mean
+pressure, the fraction of a molecule's collisions that are with other molecules rather
+than the walls (Karniadakis et al. 2005, Eq. 4.21), so that it vanishes in free-molecular
+flow, where the transmission probability already holds all the slot's resistance.  A case
+from 0.01 bar to 1 bar thus runs through one continuous, monotone law.
+
+Orifices (paths whose column is an area, such as blow-holes): the continuum nozzle and the
+free-molecular effusion (W = 1) through the same area, weighted by the same w with Kn at
+the upstream pressure (Sharipov's rarefaction parameter of an orifice is the upstream
+one) and the path's gap as the size that sets Kn: f = w f_nozzle + (1 - w) (1 - x) /
+sqrt(2 pi).  Give the hole's size as its gap ([leakage.blow-hole] gap_um).
+
+Everything is written, as in :mod:`.flows`, as the flux over sqrt(p1 rho1) per unit flow
+area (h l for a sealing line, the area for an orifice), R T = p1 / rho1 of the upstream
+state.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+# Beskok & Karniadakis (1999): alpha(Kn) = alpha_inf (2/pi) atan(ALPHA1 Kn^BETA) for a channel
+ALPHA1 = 4.0
+BETA = 0.4
+# Gauss-Legendre nodes of the integral over the land, in ln p: 16 hold it to 1e-11 for
+# pressure ratios down to 1e-4 against adaptive quadrature (tests).
+N_GAUSS = 16
+_G, _GW = np.polynomial.legendre.leggauss(N_GAUSS)
+# Pressure ratios below this are taken as this: none occurs between the chambers of a
+# machine, and the flux changes by less than 1e-9 of itself (it is linear in 1 - x or in
+# 1 - x^2 there), while ln x stays finite for the quadrature.
+X_FLOOR = 1.0e-9
+# Clausing's equation is solved directly up to this L/h (1,200 nodes, 0.4 s once per
+# distinct path); beyond it W = (ln(L/h) + C) / (L/h), the diffusive form of a long slot,
+# with C from the solution at this length (C drifts by ~0.02 per doubling of L/h, so
+# about 0.3 % of W at twice this length).
+L_DIRECT_MAX = 200.0
+# Nystrom panels per gap height and Gauss nodes per panel: 1e-7 of W against 8 x 8.
+_PANELS_PER_H = 1
+_NODES_PER_PANEL = 6
+
+
+def mean_free_path(viscosity_Pa_s, p, RT):
+    """lambda = mu / p sqrt(pi R T / 2) (the hard-sphere mean free path; RT = p / rho)."""
+    return viscosity_Pa_s / p * np.sqrt(0.5 * math.pi * RT)
+
+
+def _clausing(l: float) -> float:
+    """Transmission probability of a slot of length l (in gap heights) between diffuse
+    plates: Clausing's integral equation for the wall emission J(x) per unit entering flux,
+    J(x) = G(x) + int_0^l K(x - x') J(x') dx' with the view factors of infinitely long
+    strips (Hottel's crossed strings): K(s) = 1 / (2 (1 + s^2)^(3/2)) from the opposite
+    plate, G(x) = (1 - x / sqrt(1 + x^2)) / 2 from the inlet; then
+    W = sqrt(1 + l^2) - l (inlet straight to outlet) + 2 int_0^l J F_out dx."""
+    n_pan = max(1, math.ceil(l * _PANELS_PER_H))
+    g, gw = np.polynomial.legendre.leggauss(_NODES_PER_PANEL)
+    edges = np.linspace(0.0, l, n_pan + 1)
+    a, b = edges[:-1, None], edges[1:, None]
+    x = (0.5 * (a + b) + 0.5 * (b - a) * g).ravel()
+    w = (0.5 * (b - a) * gw).ravel()
+    s = x[:, None] - x[None, :]
+    K = 0.5 / (1.0 + s * s) ** 1.5 * w[None, :]
+    G = 0.5 * (1.0 - x / np.sqrt(1.0 + x * x))
+    J = np.linalg.solve(np.eye(x.size) - K, G)
+    F_out = 0.5 * (1.0 - (l - x) / np.sqrt(1.0 + (l - x) ** 2))
+    return float(math.sqrt(1.0 + l * l) - l + 2.0 * np.sum(w * J * F_out))
+
+
+@functools.lru_cache(maxsize=128)
+def slot_transmission(l: float) -> float:
+    """Free-molecular transmission probability W of a slot of land l = L / h (diffuse
+    walls): 1 for l = 0, ~ (ln l + 0.1) / l for a long slot."""
+    if l < 0:
+        raise ValueError(f"slot length over gap must not be negative, got {l}")
+    if l == 0.0:
+        return 1.0
+    if l <= L_DIRECT_MAX:
+        return _clausing(l)
+    c = L_DIRECT_MAX * slot_transmission(L_DIRECT_MAX) - math.log(L_DIRECT_MAX)
+    return (math.log(l) + c) / l
+
+
+@dataclass(frozen=True)
+class RarefiedLaw:
+    """The rarefied flow law of one kind of gap (see the module docstring)."""
+
+    gap_m: float
+    land_m: float
+    viscosity_Pa_s: float
+    accommodation: float = 1.0  # sigma, tangential momentum accommodation
+    orifice: bool = False  # the path's column is an area (blow-hole): no land
+
+    @property
+    def slip(self) -> float:
+        """s = (2 - sigma) / sigma of the slip term."""
+        return (2.0 - self.accommodation) / self.accommodation
+
+    @functools.cached_property
+    def alpha_inf(self) -> float:
+        """alpha_inf = 12 W L / (7 pi h): the free-molecular limit is the slot's W."""
+        lh = self.land_m / self.gap_m
+        return 12.0 * slot_transmission(lh) * lh / (7.0 * math.pi)
+
+    def knudsen(self, p, RT):
+        return mean_free_path(self.viscosity_Pa_s, p, RT) / self.gap_m
+
+    def rarefaction(self, kn):
+        """R(Kn) = (1 + alpha(Kn) Kn) (1 + 6 s Kn / (1 + Kn)) of the unified model."""
+        alpha = self.alpha_inf * (2.0 / math.pi) * np.arctan(ALPHA1 * kn**BETA)
+        return (1.0 + alpha * kn) * (1.0 + 6.0 * self.slip * kn / (1.0 + kn))
+
+    def viscous_flux(self, x, kn1):
+        """Flux of the unified model over sqrt(p1 rho1) per unit of h l, for x = p2/p1
+        and Kn1 = Kn at p1: (h/L) sqrt(pi/2) / (12 Kn1) int_x^1 xi R(Kn1 / xi) dxi,
+        the integral by Gauss-Legendre in ln xi."""
+        x = np.maximum(x, X_FLOOR)
+        kn1 = np.asarray(kn1, dtype=float)
+        half = -0.5 * np.log1p(x - 1.0)  # (ln 1 - ln x) / 2, exact near x = 1
+        xi = np.exp(-half[..., None] * (1.0 - _G))  # nodes in [x, 1]
+        integral = half * np.sum(_GW * xi * xi * self.rarefaction(kn1[..., None] / xi),
+                                 axis=-1)
+        return (self.gap_m / self.land_m) * math.sqrt(0.5 * math.pi) / (12.0 * kn1) * integral
+
+    def reduced_flux(self, f_nozzle, x, p1, rho1):
+        """Flux over sqrt(p1 rho1) per unit flow area, given the nozzle's f_nozzle of
+        the same flows (x = p2 / p1 <= 1, upstream p1 and rho1)."""
+        RT = p1 / rho1
+        kn1 = self.knudsen(p1, RT)
+        if self.orifice:
+            w = 1.0 / (1.0 + kn1)
+            return w * f_nozzle + (1.0 - w) * (1.0 - x) / math.sqrt(2.0 * math.pi)
+        f_v = self.viscous_flux(x, kn1)
+        w = 1.0 / (1.0 + 2.0 * kn1 / (1.0 + x))  # Kn at the mean pressure
+        # f_nozzle is 0 at x = 1 (and where round-off takes 1 - x below ~1e-16): there
+        # the inertial resistance is nil against the viscous one, f = f_v
+        live = f_nozzle > 0.0
+        q = np.where(live, f_v / np.where(live, f_nozzle, 1.0), 0.0)
+        return 2.0 * f_v / (1.0 + np.hypot(1.0, 2.0 * np.sqrt(w) * q))
+
+    def mass_flux(self, pa, ra, pb, rb, gamma: float):
+        """Mass flux (kg/s per m^2 of flow area) from state a to state b, negative from b
+        to a: the law as the chamber model applies it (:meth:`.model.ChamberModel._flows`)."""
+        from .flows import nozzle_f
+
+        pa, ra, pb, rb = np.broadcast_arrays(*(np.asarray(v, dtype=float)
+                                               for v in (pa, ra, pb, rb)))
+        fwd = pa >= pb
+        p1 = np.where(fwd, pa, pb)
+        r1 = np.where(fwd, ra, rb)
+        x = np.where(fwd, pb, pa) / p1
+        f = self.reduced_flux(nozzle_f(x, gamma), x, p1, r1)
+        g = np.sqrt(p1 * r1) * f
+        return np.where(fwd, g, -g)

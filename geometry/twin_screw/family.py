@@ -6,13 +6,17 @@
   "line-circle" (an asymmetric rack of this project's own making, :mod:`.asymmetric`)
   or "pin-cycloid" (SRM's asymmetric pin-arc / cycloid profile, :mod:`.pin_cycloid`:
   the female lies inside its pitch circle, so female_diameter_mm is its pitch diameter
-  and the male's addendum is the pin radius);
+  and the male's addendum is the pin radius), or "trochoidal" (a screw-pump profile of
+  identical rotors with sharp tip corners, :mod:`.pump_profiles`; equal lobe counts and
+  diameters).  With equal lobe counts and diameters, "circular" makes identical rotors
+  too (the screw pumps' circular profile, seed 003);
 * ``lobes_male``, ``lobes_female``: any combination (3/5, 4/5, 4/6, 5/6, 5/7, ...);
 * ``centre_distance_mm``: the pitch circles follow, r = C N / (N1 + N2);
 * ``male_diameter_mm``, ``female_diameter_mm``: the outer diameters, which fix the
   rack's depth on each side of the pitch line;
 * ``tip_radius_mm`` (optional): the rack's male-tip circle; by default the one that
-  centres the female tip's circle on the pitch line (circular) or 0.9 of it
+  centres the female tip's circle on the pitch line (circular; for equal lobe counts
+  and diameters the one of equal circles, whose rotors are identical) or 0.9 of it
   (line-circle, so that the straight flank exists);
 * ``blow_hole`` (optional): the surface that spans the blow-hole (:mod:`.blowhole`),
   "cusp-plane" (default) or "plane" (seed 004's plane through the contact line's end).
@@ -30,6 +34,7 @@ from .circular import symmetric_circular_pair
 from .meshing import Gearing
 from .pair import TwinScrewPair
 from .pin_cycloid import pin_cycloid_pair
+from .pump_profiles import check_identical, identical_pair, identical_tip_radius, trochoidal_pair
 
 KEYS = frozenset({"profile", "lobes_male", "lobes_female", "centre_distance_mm",
                   "male_diameter_mm", "female_diameter_mm", "tip_radius_mm", "blow_hole"})
@@ -52,8 +57,20 @@ def _pin_cycloid(gearing: Gearing, male_addendum: float, female_addendum: float,
     return pin_cycloid_pair(gearing, male_addendum)
 
 
+def _trochoidal(gearing: Gearing, male_addendum: float, female_addendum: float,
+                tip_radius: float | None):
+    """The trochoidal screw-pump profile (:mod:`.pump_profiles`): identical rotors."""
+    check_identical(gearing, male_addendum, female_addendum, "trochoidal")
+    if tip_radius is not None:
+        raise CaseError("tip_radius_mm does not apply to the trochoidal profile (its tips "
+                        "are sharp corners)")
+    return trochoidal_pair(gearing, gearing.r1 + male_addendum)
+
+
 PROFILES = {"circular": symmetric_circular_pair, "line-circle": asymmetric_pair,
-            "pin-cycloid": _pin_cycloid}
+            "pin-cycloid": _pin_cycloid, "trochoidal": _trochoidal}
+#: Profiles with no rack tip circle (tip_radius_mm does not apply).
+NO_TIP_RADIUS = ("pin-cycloid", "trochoidal")
 #: A female outer radius this close (per C) to the pitch radius is on it.
 PITCH_TOL = 1e-9
 #: The line-circle rack's default male-tip circle, per the centred one: 10 % smaller
@@ -84,10 +101,13 @@ def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: flo
     if hf < -PITCH_TOL * centre_distance:
         raise CaseError(f"the female diameter {female_diameter * 1e3:.4g} mm is inside its "
                         f"pitch circle ({2e3 * g.r2:.4g} mm)")
-    if tip_radius is None and profile != "pin-cycloid":
+    if tip_radius is None and profile not in NO_TIP_RADIUS:
         tip_radius = centred_tip_radius(g, hm, hf)
         if profile == "line-circle":
             tip_radius *= LINE_CIRCLE_TIP
+        elif identical_pair(g, hm, hf):
+            # N-N with equal diameters: the rack whose male and female are one rotor
+            tip_radius = identical_tip_radius(g, hm)
     male, female = PROFILES[profile](g, hm, hf, tip_radius)
     return TwinScrewPair(g, male, female, profile)
 

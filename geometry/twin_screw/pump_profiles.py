@@ -1,0 +1,107 @@
+"""Screw-pump profiles: N-N pairs of identical rotors, one tool cutting both (seed 003).
+
+Vacuum and multiphase screw pumps run 1-1 rotors (multi-lobe N-N as an option, seed 003
+Fig. 4) with one profile for both, on pitch circles of equal radius r = C / 2; each
+rotor's outer radius R and root radius rho = C - R.  Two constructions (seed 003 Fig. 3
+names the circular, trochoidal and involute profiles; it gives no dimensions):
+
+* ``circular``: the symmetric circular rack (:mod:`.circular`) with equal addenda and
+  equal circles (:func:`identical_tip_radius`): the rack is then point-symmetric about
+  its pitch-line point between the circles, so the male and female it generates are one
+  rotor.  Smooth throughout: small blow-hole, large carry-over (the seed's words).
+* ``trochoidal`` (:func:`trochoidal_pair`): each lobe is a tip arc of radius R and a
+  root arc of radius rho, each over half the lobe (w = pi / N), joined by flanks that
+  are the traces of the mate's tip corners (:class:`.point_generated.PointTrace`).  The
+  tip arc of one rotor runs on the root arc of the other through the mesh (both on the
+  centre line, whose normal passes the pitch point); when the arcs part, each rotor's
+  tip corner follows the mate's flank.  Each corner's trace (below) is a loop through
+  rho and back to R on one ray; the flank is the half of it that lies under the tip arc
+  (it cuts the lobe's neck: the lobes are mushroom-shaped), the other half falls in the
+  mate's open groove.  Which half goes where is what the interference check decides:
+  the other choices overlap by up to 1.3 mm.  Relative to the rotor, a mate's point at
+  radius R traces, with both rotors at one speed, X(t) = C e^{-it} - R e^{-2it} (corner
+  on the centre line at t = 0), so |X|^2 = C^2 + R^2 - 2 C R cos t: the trace runs from
+  rho (t = 0) out to R at cos t_R = C / (2R) = r / R, where Im X = sin t (2 R cos t -
+  C) = 0 -- it ends on the ray it started on.  The flank spans no angle, which is why
+  tip and root arcs take half a lobe each.  Sharp tip corners: small carry-over, large
+  blow-hole (the seed's words).
+
+The involute pump profile (a trapezoidal rack) is not built yet.
+"""
+
+from __future__ import annotations
+
+import math
+
+from rotorflow.errors import CaseError
+
+from .arcs import CircleArc
+from .meshing import Gearing, OnRotor
+from .point_generated import PointTrace, check_no_overlap
+from .profiles import TwinProfile, check_no_loop
+
+
+def identical_pair(gearing: Gearing, male_addendum: float, female_addendum: float) -> bool:
+    """Equal lobe counts and outer diameters: a pair that can be one rotor twice."""
+    return (gearing.lobes_male == gearing.lobes_female
+            and abs(male_addendum - female_addendum) <= 1e-9 * gearing.centre_distance)
+
+
+def check_identical(gearing: Gearing, male_addendum: float, female_addendum: float,
+                    profile: str) -> None:
+    """A pump profile needs equal lobe counts and equal outer diameters."""
+    g = gearing
+    if g.lobes_male != g.lobes_female:
+        raise CaseError(f"the {profile} pump profile makes identical rotors: lobes_male and "
+                        f"lobes_female must be equal, got {g.lobes_male}/{g.lobes_female}")
+    if not identical_pair(g, male_addendum, female_addendum):
+        raise CaseError(f"the {profile} pump profile makes identical rotors: "
+                        f"male_diameter_mm and female_diameter_mm must be equal, got "
+                        f"{2e3 * (g.r1 + male_addendum):.6g} and "
+                        f"{2e3 * (g.r2 + female_addendum):.6g}")
+
+
+def identical_tip_radius(gearing: Gearing, addendum: float) -> float:
+    """The symmetric circular rack's male-tip radius for which male and female are one
+    rotor: both circles of one radius, (H^2 + (p/2)^2) / (4 H), H = 2 x addendum."""
+    h, half = 2.0 * addendum, 0.5 * gearing.pitch
+    return (h * h + half * half) / (4.0 * h)
+
+
+def trochoidal_pair(gearing: Gearing, outer_radius: float) -> tuple[TwinProfile, TwinProfile]:
+    """Male and female of the trochoidal pump profile (module docstring), checked for
+    loops and interference."""
+    g, R = gearing, outer_radius
+    c, n = g.centre_distance, g.lobes_male
+    rho = c - R
+    if not (g.r1 < R < c):
+        raise CaseError(f"the trochoidal pump profile's outer radius {R * 1e3:.4g} mm must lie "
+                        f"between the pitch radius {g.r1 * 1e3:.4g} mm and the centre "
+                        f"distance {c * 1e3:.4g} mm (the root radius C - R is positive)")
+    w = math.pi / n  # tip and root arcs: half a lobe each
+    t_r = math.acos(g.r1 / R)  # turn from the centre line until a corner leaves the flank
+    def corner(angle: float) -> tuple[float, float]:
+        return (R * math.cos(angle), R * math.sin(angle))
+
+    # Male frame, lobe 0: the tip arc centred on +x (facing the female at theta = 0).
+    male = TwinProfile("male", (
+        PointTrace("female tip corner", corner(math.pi + 0.5 * w), g, "female",
+                   0.5 * w, 0.5 * w + t_r),
+        OnRotor(CircleArc("tip", (0.0, 0.0), R, -0.5 * w, 0.5 * w), "male"),
+        PointTrace("female tip corner", corner(math.pi - 0.5 * w), g, "female",
+                   -0.5 * w - t_r, -0.5 * w),
+        OnRotor(CircleArc("root", (0.0, 0.0), rho, 0.5 * w, 1.5 * w), "male"),
+    ), n)
+    # Female frame, lobe 0: the root arc centred on -x (facing the male's tip).
+    female = TwinProfile("female", (
+        PointTrace("male tip corner", corner(0.5 * w), g, "male", -0.5 * w + t_r, -0.5 * w),
+        OnRotor(CircleArc("root", (0.0, 0.0), rho, math.pi - 0.5 * w, math.pi + 0.5 * w),
+                "female"),
+        PointTrace("male tip corner", corner(-0.5 * w), g, "male", 0.5 * w, 0.5 * w - t_r),
+        OnRotor(CircleArc("tip", (0.0, 0.0), R, math.pi + 0.5 * w, math.pi + 1.5 * w),
+                "female"),
+    ), n)
+    for profile in (male, female):
+        check_no_loop(profile, c)
+    check_no_overlap(male, female, g)
+    return male, female

@@ -24,12 +24,17 @@ IDEAL_CYCLE_GAMMA = 1.4
 
 
 def adiabatic_pressure(volume, eps_v: float, p_suction: float = 1.0e5,
-                       gamma: float = IDEAL_CYCLE_GAMMA):
-    """Pressure along a chamber's life: suction, adiabatic compression, matched discharge.
+                       gamma: float = IDEAL_CYCLE_GAMMA, p_discharge: float | None = None,
+                       opening: int | None = None):
+    """Pressure along a chamber's life: suction, adiabatic compression, discharge.
 
     Suction at ``p_suction`` until the volume peaks; then ``p (V_max/V)^gamma`` until
-    the volume has fallen by the built-in ratio ``eps_v``; then the discharge pressure
-    ``p_suction eps_v^gamma`` (matched compression) to the end.
+    the volume has fallen by the built-in ratio ``eps_v``; then the discharge pressure,
+    by default ``p_suction eps_v^gamma`` (matched compression) to the end.  Given
+    ``p_discharge``, the chamber takes that pressure where it opens (over- or
+    under-compression, a sudden equalisation): at sample ``opening`` if given, else
+    where its volume has fallen by ``eps_v`` (with ``eps_v = 1``, a pump without
+    internal compression, the discharge pressure reaches the chamber at ``opening``).
     """
     v = np.asarray(volume, dtype=float)
     k = int(np.argmax(v))
@@ -43,6 +48,10 @@ def adiabatic_pressure(volume, eps_v: float, p_suction: float = 1.0e5,
     comp = np.full_like(tail, p_dis)
     comp[compressing] = p_suction * (v_max / tail[compressing]) ** gamma
     p[k:] = np.minimum(comp, p_dis)
+    if p_discharge is not None:
+        if opening is None:
+            opening = k + int(np.argmin(compressing)) if not compressing.all() else len(v)
+        p[opening:] = p_discharge
     return p
 
 
@@ -94,18 +103,40 @@ def net_loads(machine: SweptMachine, pressure: np.ndarray):
     return _fold(c.phi, c.torque, c.force, pressure, machine.points_per_period)
 
 
+def _opening(machine: SweptMachine, phi: np.ndarray, volume: np.ndarray) -> int:
+    """Sample of ``phi`` at which a chamber without internal compression opens to the
+    discharge (:func:`.ports.port_timing`): the end of its transport plateau, where its
+    leading section reaches the discharge plate, or its volume maximum if it has none."""
+    life, wrap = machine.life_2d, machine.sweep.wrap
+    if life < wrap:
+        return int(np.searchsorted(phi - machine.section.phi_i, wrap - 1e-9 * wrap))
+    return int(np.argmax(volume))
+
+
 def power_split(
     machine: SweptMachine,
     eps_v: float,
     driven: str = "auto",
     p_suction: float = 1.0e5,
     gamma: float = IDEAL_CYCLE_GAMMA,
+    p_discharge: float | None = None,
 ) -> PowerSplit:
-    """Seed 000 Eqs. 17-22: power balance, power ratios, driven rotor and Pi_max."""
+    """Seed 000 Eqs. 17-22: power balance, power ratios, driven rotor and Pi_max.
+
+    ``p_discharge``: the discharge plenum's pressure where it differs from the matched
+    one (:func:`adiabatic_pressure`); a pump without internal compression (``eps_v =
+    1``) needs it, and its chamber takes it where it opens (:func:`_opening`), so that
+    its cycle work is ``(p_discharge - p_suction) V_max``."""
+    if eps_v == 1.0 and p_discharge is None:
+        raise ValueError("a volume ratio of 1 compresses nothing: the power split needs "
+                         "the discharge pressure")
     # Loads on the fine section grid: the power ratios have kinks (a chamber starting
     # to discharge), so their maximum is taken where the loads are sampled finely.
     fine = machine.loads
-    p = adiabatic_pressure(fine.volume, eps_v, p_suction, gamma)
+    c = machine.curves
+    opens = ((None, None) if eps_v != 1.0 else
+             (_opening(machine, fine.phi, fine.volume), _opening(machine, c.phi, c.volume)))
+    p = adiabatic_pressure(fine.volume, eps_v, p_suction, gamma, p_discharge, opens[0])
     # Gauge pressure: a uniform pressure loads no rotor, so only p - p_suction matters,
     # and leaving it out keeps the sums free of cancellation.
     phi, tq, force = _fold(fine.phi, fine.torque, fine.force, p - p_suction,
@@ -117,8 +148,7 @@ def power_split(
     ratio = power / p_in[:, None]
     # Eq. 18 with the cycle work of the chamber's own p-V loop; for a conjugate pair
     # (no clearance volume) it equals the closed form of Eq. 17 (see tests).
-    c = machine.curves
-    p_c = adiabatic_pressure(c.volume, eps_v, p_suction, gamma)
+    p_c = adiabatic_pressure(c.volume, eps_v, p_suction, gamma, p_discharge, opens[1])
     w = -float(np.trapezoid((p_c - p_suction) * c.dvolume, c.phi))
     cycle = w * rotors[0].lobes / (2.0 * math.pi)
     names = tuple(r.name for r in rotors)

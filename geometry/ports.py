@@ -14,6 +14,17 @@ follows the quasi-1D model's rules: suction closes at the volume maximum and dis
 opens where the volume has fallen to ``V_max / volume_ratio``, unless [operating]
 gives ``suction_close_deg`` / ``discharge_open_deg`` (angles since birth).
 
+A chamber with a transport phase (a wrap longer than its section's life, seed 003's
+screw pumps: the chamber leaves the suction plate before it reaches the discharge plate
+and keeps its volume in between) closes to suction where its last section leaves the
+suction plate, the start of that plateau (its volume maximum is anywhere on it).  With
+``volume_ratio = 1`` (no internal compression: a vacuum or multiphase pump, where
+seed 003's transport phase carries the gas to the discharge at constant volume) the
+discharge opens where the chamber's leading section reaches the discharge plate, the
+end of the plateau, where the volume starts to fall (screw-pump practice: the discharge
+edge lies on the end plate, the pressure rises by backflow when the chamber opens);
+without a plateau that is the volume maximum, where suction closes.
+
 The chamber's section is the family's (:meth:`RotorPair.chamber_polygons`); where it is
 split into sub-regions (the internal gear's deep mesh), only those that belong to it.
 Sections are sampled at
@@ -74,8 +85,17 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
     imax = int(np.argmax(v))
     alive = np.nonzero(v > 0.0)[0]
     death = float(age[alive[-1] + 1]) if alive[-1] + 1 < len(age) else float(age[-1])
-    sc = float(age[imax]) if suction_close is None else float(suction_close)
-    if discharge_open is None:
+    # The transport plateau: from the section's death (it leaves the suction plate) to
+    # its birth reaching the discharge plate, ages on the table's nodes.
+    plateau = (machine.life_2d, machine.sweep.wrap)
+    transport = plateau[0] < plateau[1]
+    if suction_close is not None:
+        sc = float(suction_close)
+    else:
+        sc = plateau[0] if transport else float(age[imax])
+    if discharge_open is None and volume_ratio == 1.0:
+        do = (plateau[1] if transport else sc) - early_opening
+    elif discharge_open is None:
         target = v[imax] / volume_ratio
         after = np.nonzero(v[imax:] <= target)[0]
         if not len(after):
@@ -86,7 +106,9 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
         do = float(age[k - 1] + f * (age[k] - age[k - 1])) - early_opening
     else:
         do = float(discharge_open)
-    if not 0.0 < sc < do < death:
+    # Without internal compression and without a transport phase the suction closes and
+    # the discharge opens at one angle, the volume maximum.
+    if not (0.0 < sc < do < death or (0.0 < sc == do < death and volume_ratio == 1.0)):
         raise CaseError(f"port timing out of order: suction closes at {math.degrees(sc):.1f} deg,"
                         f" discharge opens at {math.degrees(do):.1f} deg, the chamber dies at "
                         f"{math.degrees(death):.1f} deg")

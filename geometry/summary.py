@@ -23,6 +23,22 @@ def build_machine(case, points_per_period: int | None = None) -> SweptMachine:
     return SweptMachine(case.pair, case.sweep(life), ppp)
 
 
+def case_power_split(case, m: SweptMachine, driven: str = "auto"):
+    """The ideal cycle's power split (:func:`.forces.power_split`) at 1 bar suction; a
+    case without internal compression (volume_ratio = 1) discharges into its
+    [operating] pressure ratio, which it must then give."""
+    if case.volume_ratio != 1.0:
+        return power_split(m, case.volume_ratio, driven)
+    from rotorflow.errors import CaseError
+
+    op = case.raw.get("operating", {})
+    if not all(isinstance(op.get(k), (int, float)) for k in ("p_suction_bar", "p_discharge_bar")):
+        raise CaseError(f"volume_ratio = 1 (no internal compression) in [operating] of "
+                        f"{case.name}: the ideal cycle needs p_suction_bar and p_discharge_bar")
+    ratio = float(op["p_discharge_bar"]) / float(op["p_suction_bar"])
+    return power_split(m, 1.0, driven, p_discharge=1.0e5 * ratio)
+
+
 def _deg(x):
     return math.degrees(x)
 
@@ -33,7 +49,7 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
     pair, sec, cur = m.pair, m.section, m.curves
     d = pair.diameter
     reference = pair.rotors[0]
-    split = power_split(m, case.volume_ratio, case.driven)
+    split = case_power_split(case, m, case.driven)
     v_sw_bar = m.swept_volume / m.cylinder_volume
     n_dr = pair.rotor(split.driven).lobes
     phi = cur.phi
@@ -85,7 +101,7 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     m = machine or build_machine(case)
     cur = m.curves
     pair = m.pair
-    driven = case.driven if case.driven != "auto" else power_split(m, case.volume_ratio).driven
+    driven = case.driven if case.driven != "auto" else case_power_split(case, m).driven
     # Reference-rotor turns per driven-rotor turn: the inverse of the speed ratio, from
     # the lobe counts (exact for gearing, N_driven / N_reference).
     ratio = pair.rotor(driven).lobes / pair.rotors[0].lobes

@@ -183,8 +183,9 @@ def _operating(data: dict, path: Path, pair: RotorPair) -> tuple[float, str, str
         raise CaseError(f"[operating] in {path} must be a table")
     where = f"[operating] of {path}"
     volume_ratio = number(op, "volume_ratio", where) if "volume_ratio" in op else 2.0
-    if not volume_ratio > 1.0:
-        raise CaseError(f"volume_ratio must be greater than 1 in {where}, got {volume_ratio}")
+    if not volume_ratio >= 1.0:
+        raise CaseError(f"volume_ratio must be at least 1 in {where} (1: no internal "
+                        f"compression), got {volume_ratio}")
     driven = op.get("driven", "auto")
     names = [r.name for r in pair.rotors]
     if driven not in (*names, "auto"):

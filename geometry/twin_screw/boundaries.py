@@ -10,7 +10,9 @@ arc's load per unit pressure is its ends' (force rot(b - a), torque
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -29,6 +31,14 @@ LENS_MATCH = 2e-3
 #: A cut at the cusp this near a tip (per C) ends at the tip: a rounded tip nearly as
 #: curved as its bore overlaps it over a lens of up to ~0.2 mm at C = 78 mm.
 TIP_MATCH = 5e-3
+
+#: A rotor within this (per C) of its bore over an arc about its tip seals along the whole
+#: arc: a cut at the cusp that ends on it ends at the tip.  Four times the rotors' growth
+#: (the grown rotor reaches the bore where the gap is below one growth, and leaves fluid
+#: slivers a fraction of a micron thick just beyond): a 1-lobe rotor's tip can be nearly
+#: as curved as its bore over a millimetre, beyond TIP_MATCH (0.55 mm measured on the
+#: circular 1/1 pair at C = 78 mm), where no real clearance is this small (0.6 um).
+TIP_BAND = 8e-6
 
 #: A cut along the cusp line ending this near (per C) a cusp point starts there: the
 #: bores' polygons meet within a chord error (1e-6 C) of the true cusp.
@@ -85,7 +95,19 @@ class Boundaries:
         rotor_end = np.where(vlab <= FEMALE, vlab, np.where(nxt <= FEMALE, nxt, NEW))
         rotor_end[(vlab <= FEMALE) & (nxt <= FEMALE) & (vlab != nxt) & (vlab >= 0)] = NEW
         elab = np.where(rotor_end >= 0, rotor_end, np.where(vlab == nxt, vlab, NEW))
-        elab[on_cusp & ~((vlab == nxt) & (vlab <= FEMALE) & (vlab >= 0))] = CUSP
+        chord = (vlab == nxt) & (vlab <= FEMALE) & (vlab >= 0)
+        # A rotor's chord that runs within the tolerance of the cusp line (a flank
+        # nearly parallel to it) ends where the line cuts it, at a new vertex on that
+        # chord: up to there it is the rotor's, or both sides of the line lose a piece of
+        # it (microns, where the flank is nearly parallel to the line).
+        ahead = np.roll(ring, -1, axis=0)
+        for r in (MALE, FEMALE):
+            for cut, new in ((on_cusp & ~chord & (vlab == r) & (nxt == NEW), ahead),
+                             (on_cusp & ~chord & (nxt == r) & (vlab == NEW), ring)):
+                if cut.any():
+                    d = self._segment_distance(r, self.to_rotor(r, new[cut], psi))
+                    chord[np.nonzero(cut)[0][d < SAME_VERTEX * self.C]] = True
+        elab[on_cusp & ~chord] = CUSP
         bore = (elab == NEW) & np.isin(vlab, (BORE_M, BORE_F)) & np.isin(nxt, (BORE_M, BORE_F))
         elab[bore] = np.where(np.linalg.norm(ring[bore] - self.O[0], axis=-1) < self.R[0] + tol,
                               BORE_M, BORE_F)
@@ -197,9 +219,44 @@ class Boundaries:
             tips = self.rotor_at(r, self._rotor_data[r].tips, psi)
             d = np.linalg.norm(tips - x, axis=-1)
             k = int(np.argmin(d))
-            if d[k] < TIP_MATCH * self.C:
+            if d[k] < TIP_MATCH * self.C or self._in_tip_band(r, k, x, psi):
                 return tips[k]
         return x
+
+    def _in_tip_band(self, r, k, x, psi) -> bool:
+        """Whether x lies on rotor r's bore next to tip k where the rotor runs within
+        TIP_BAND of its bore all the way from the tip."""
+        lo, hi = self._tip_bands[r]
+        local = self.to_rotor(r, np.asarray(x)[None, :], psi)[0]
+        if np.linalg.norm(local) < self.R[r] - TIP_BAND * self.C:
+            return False
+        tip = self._rotor_data[r].tips[k]
+        off = math.remainder(math.atan2(local[1], local[0]) - math.atan2(tip[1], tip[0]),
+                             2.0 * math.pi)
+        return lo <= off <= hi
+
+    @cached_property
+    def _tip_bands(self):
+        """Per rotor, the polar angles (from its tip's) between which its profile lies
+        within TIP_BAND of its outer radius, next to the tip (from the sampled profile)."""
+        out = []
+        for r, profile in ((MALE, self.pair.male), (FEMALE, self.pair.female)):
+            u = self._rotor_data[r].u
+            pts = profile.point(u)
+            rad = np.linalg.norm(pts, axis=-1)
+            tip = self._rotor_data[r].tips[0]
+            m = len(u)
+            i0 = int(np.argmin(np.linalg.norm(pts - tip, axis=-1)))
+            near = self.R[r] - rad < TIP_BAND * self.C
+            ends = []
+            for step in (-1, 1):
+                i = i0
+                while near[(i + step) % m] and (i + step - i0) * step < m // 2:
+                    i += step
+                ends.append(math.remainder(math.atan2(pts[i % m, 1], pts[i % m, 0])
+                                           - math.atan2(tip[1], tip[0]), 2.0 * math.pi))
+            out.append((min(ends + [0.0]), max(ends + [0.0])))
+        return out
 
     def _contacts(self, psi, lenses) -> None:
         """Give both ends of every overlap of the grown rotors one contact point.

@@ -40,7 +40,7 @@ from scipy.spatial import cKDTree
 
 from ..curves import sample
 from ..planar import TWO_PI, rotate
-from .boundaries import FEMALE, MALE, Boundaries
+from .boundaries import CUSP_POINT, FEMALE, MALE, Boundaries
 
 #: Coordinates run in units of C / UNITS inside Clipper (it rounds to 1e-8).
 UNITS = 1000.0
@@ -60,6 +60,9 @@ WHOLE_FRACTION = 1e-2
 #: A pocket's area rate (per C^2 and radian) below this is no rate: it is handed over
 #: by the side of the line of centres it lies on.
 POCKET_RATE = 1e-12
+#: A part with a point this far (rad) beyond the cusps' polar angle reaches out of the
+#: mesh onto its bore (a bore's polygon vertex lies within a chord error, 1e-6 C, of it).
+MESH_MARGIN = 1e-4
 #: Gauss nodes per polygon edge for its sliver and length (the edge is a short smooth
 #: arc: 6 nodes integrate it to rounding).
 SLIVER_NODES = 6
@@ -225,7 +228,7 @@ class SectionCutter(Boundaries):
         for part in parts:
             if part.centroid is not None:
                 rate = part.torque[MALE] - self.ratio * part.torque[FEMALE]
-                part.groove, part.age = self._groove_age(part.rotor, part.centroid, psi,
+                part.groove, part.age = self._groove_age(part.rotor, part.polygons, psi,
                                                          part.side, rate=rate)
         return parts
 
@@ -260,7 +263,9 @@ class SectionCutter(Boundaries):
         near = np.min(np.linalg.norm(rings[0][None, :, :] - tips[:, None, :], axis=-1), 1)
         pair = sorted(np.argsort(near)[:2])
         k = pair[1] if (pair[0], pair[1]) == (0, n - 1) and n > 2 else pair[0]
-        groove, age = self._groove_age(rotor, _centroid(rings[0]), psi, "", groove=int(k))
+        # Two lobes: both grooves lie between the same two tips; the centroid of a
+        # groove spanning half a turn lies within it.
+        groove, age = self._groove_age(rotor, rings, psi, "", groove=int(k) if n > 2 else None)
         # The fluid runs clockwise along the rotor, from the groove's counter-clockwise
         # tip (k + 1) to its clockwise one (k).
         a, b = tips[(groove + 1) % n], tips[groove]
@@ -286,43 +291,80 @@ class SectionCutter(Boundaries):
         part.centroid = _centroid(rings[0])
         return part
 
-    def _groove_age(self, rotor, centroid, psi, side, groove=None, rate=0.0):
+    def _groove_age(self, rotor, rings, psi, side, groove=None, rate=0.0):
         """(groove index, age in male-angle units) of a part (module docstring).
 
-        A pocket in the mesh that reaches neither cusp (trapped between contacts, or
-        open to both sides) belongs to the dying chamber while it shrinks and to the
-        newborn one while it grows (``rate``: its area's rate per male angle, which is
-        its torques' power): so it changes hands at its smallest, and the chambers'
-        areas stay continuous but for that carry-over.
+        The age is the groove's mid-line angle from the line of centres, unwrapped over
+        the groove's life: a life runs from the top of the mesh once round to its
+        bottom, and with few lobes (a 1-lobe groove is the whole circumference) it lasts
+        longer than a revolution, so the mid-line's angle alone does not tell which
+        life a part is.  Its fluid does: a point of the part at polar angle ``a`` from
+        the line of centres (positive towards the top, where the grooves are born) has
+        travelled ``a mod 2 pi`` since it left the mesh, and lies ``f`` from the
+        mid-line, so the groove's age is ``(a mod 2 pi) - f``; the point taken is the
+        one farthest from the mesh, where that is unambiguous.
+
+        A part wholly inside the mesh (between the cusps) goes by the cusp it reaches
+        (its own, else its piece's ``side``): the top one is newborn, the bottom one
+        dying.  A pocket that reaches neither (trapped between contacts, or open to
+        both sides) belongs to the dying chamber while it shrinks and to the newborn one
+        while it grows (``rate``: its area's rate per male angle, which is its torques'
+        power): so it changes hands at its smallest, and the chambers' areas stay
+        continuous but for that carry-over.
         """
         pair = self.pair
         n = pair.gearing.lobes_male if rotor == MALE else pair.gearing.lobes_female
         period = TWO_PI / n
         tip0 = pair.tip_angle(rotor)
+        centroid = _centroid(rings[0])
         if groove is None:
             local = self.to_rotor(rotor, centroid, psi)
             groove = int(math.floor(((math.atan2(local[1], local[0]) - tip0) % TWO_PI)
                                     / period)) % n
         k = groove
         mid = tip0 + (k + 0.5) * period  # the groove's mid-line, own frame
+        pts = np.concatenate(rings)
         if rotor == MALE:
             theta = math.remainder(mid + psi, TWO_PI)  # 0: facing the female axis
+            a = np.arctan2(pts[:, 1], pts[:, 0])
             scale = 1.0
         else:
             theta = math.remainder(math.pi - (mid + self.female_angle(psi)), TWO_PI)
+            a = np.arctan2(pts[:, 1], self.C - pts[:, 0])
             scale = 1.0 / self.ratio
+        far = int(np.argmax(np.abs(a)))
+        if abs(a[far]) > self._cusp_angle[rotor] + MESH_MARGIN:
+            age = float(a[far]) % TWO_PI - math.remainder(float(a[far]) - theta, TWO_PI)
+            return k, age * scale
+        # In the mesh: the part's points all lie within a lobe period of the line of
+        # centres, and so does the mid-line of its groove, seen from any of them.
+        near = math.remainder(float(a[far]) - theta, TWO_PI)
+        theta = float(a[far]) - near
+        reach = self._reaches(pts)
+        if reach != "":
+            side = reach
         if side == "top":
             age = theta
         elif side == "bottom":
             age = theta + TWO_PI
-        elif abs(theta) < period:  # a pocket in the mesh
-            if abs(rate) > POCKET_RATE * self.C ** 2:
-                age = theta if rate > 0.0 else theta + TWO_PI
-            else:
-                age = theta if centroid[1] > 0.0 else theta + TWO_PI
+        elif abs(rate) > POCKET_RATE * self.C ** 2:
+            age = theta if rate > 0.0 else theta + TWO_PI
         else:
-            age = theta % TWO_PI
+            age = theta if centroid[1] > 0.0 else theta + TWO_PI
         return k, age * scale
+
+    @cached_property
+    def _cusp_angle(self):
+        """Each rotor's polar angle of the cusps from the line of centres."""
+        return (math.atan2(self.yc, self.xc), math.atan2(self.yc, self.C - self.xc))
+
+    def _reaches(self, pts) -> str:
+        """"top" or "bottom" if points ``pts`` (a part's vertices) reach that cusp point
+        and not the other, else ""."""
+        tol = CUSP_POINT * self.C
+        top = bool(np.any(np.hypot(pts[:, 0] - self.xc, pts[:, 1] - self.yc) < tol))
+        bottom = bool(np.any(np.hypot(pts[:, 0] - self.xc, pts[:, 1] + self.yc) < tol))
+        return "top" if top and not bottom else ("bottom" if bottom and not top else "")
 
 
 def _inside(ring, pt) -> bool:

@@ -152,8 +152,13 @@ def _seals(pair, parts, qs):
             # Male grooves lie between tip k (clockwise end) and k + 1; the male turns
             # counter-clockwise, so its groove leads with tip k + 1.  The female turns
             # clockwise: its groove j leads with tip j.
+            # A 1-lobe rotor's one tip bounds its groove at both ends, the newborn life
+            # (whose leading tip it is: beyond it the older, dying life) and the dying one.
             n = pair.gearing.lobes_male if rotor == MALE else pair.gearing.lobes_female
-            leading = (k == (p.groove + 1) % n) if rotor == MALE else (k == p.groove)
+            if n == 1:
+                leading = q2 > q
+            else:
+                leading = (k == (p.groove + 1) % n) if rotor == MALE else (k == p.groove)
             name = f"tip-{'male' if rotor == MALE else 'female'}-{'lead' if leading else 'trail'}"
             # A tip turns with its rotor: d point / d psi = speed ratio x J (point - axis).
             axis = np.array([0.0, 0.0]) if rotor == MALE else pair.gearing.female_axis

@@ -261,8 +261,8 @@ class SectionCutter(Boundaries):
         # The groove is the one between the two tips its boundary passes (its centroid
         # may lie beyond a tip's ray under a hooked flank).
         near = np.min(np.linalg.norm(rings[0][None, :, :] - tips[:, None, :], axis=-1), 1)
-        pair = sorted(np.argsort(near)[:2])
-        k = pair[1] if (pair[0], pair[1]) == (0, n - 1) and n > 2 else pair[0]
+        pair = sorted(np.argsort(near)[:2])  # one tip only on a one-lobe rotor
+        k = pair[1] if n > 2 and (pair[0], pair[1]) == (0, n - 1) else pair[0]
         # Two lobes: both grooves lie between the same two tips; the centroid of a
         # groove spanning half a turn lies within it.
         groove, age = self._groove_age(rotor, rings, psi, "", groove=int(k) if n > 2 else None)

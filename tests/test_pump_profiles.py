@@ -1,0 +1,133 @@
+"""Screw-pump profiles of identical rotors (geometry/twin_screw/pump_profiles.py, seed 003
+Fig. 3), checked by constructions that do not use their generation: the turned polygons
+touch and never overlap (test_twin_screw_published's point-to-segment measure), the
+female is the male turned by a fixed angle (a KD-tree between point clouds), the
+construction's radii, and the corner trace's closed form |X|^2 = C^2 + R^2 - 2 C R cos t.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from rotorflow.errors import CaseError
+from rotorflow.geometry.twin_screw import Gearing
+from rotorflow.geometry.twin_screw.family import build
+from rotorflow.geometry.twin_screw.pump_profiles import trochoidal_pair
+
+from .test_twin_screw_published import CONTACT_TOL, polygon, smallest_gaps
+
+C = 0.078
+
+
+@functools.cache
+def trochoidal(n, outer_radius):
+    g = Gearing(C, n, n)
+    return (g, *trochoidal_pair(g, outer_radius))
+
+
+@functools.cache
+def circular(n, diameter):
+    pair = build("circular", n, n, C, diameter, diameter)
+    return pair.gearing, pair.male, pair.female
+
+
+PAIRS = {"trochoidal 1-1": lambda: trochoidal(1, 0.055),
+         "trochoidal 1-1 deep": lambda: trochoidal(1, 0.066),
+         "trochoidal 2-2": lambda: trochoidal(2, 0.050),
+         "trochoidal 3-3": lambda: trochoidal(3, 0.048),
+         "circular 1-1": lambda: circular(1, 0.100),
+         "circular 2-2": lambda: circular(2, 0.100)}
+
+
+@pytest.fixture(scope="module", params=sorted(PAIRS))
+def pair(request):
+    return PAIRS[request.param]()
+
+
+def test_turned_profiles_touch_and_never_overlap(pair):
+    g, male, female = pair
+    gaps = smallest_gaps(g, male, female)
+    assert gaps.min() > -CONTACT_TOL, f"overlap {-gaps.min() * 1e6:.3f} um"
+    assert gaps.max() < CONTACT_TOL, f"no contact: gap {gaps.max() * 1e6:.3f} um"
+
+
+def _turn_between(male, female):
+    """The turn that best lays the female onto the male (scanned, then refined), and
+    the largest distance left between their polygons."""
+    pm, tree = polygon(male), cKDTree(polygon(female))
+
+    def spread(a):
+        c, s = math.cos(a), math.sin(a)
+        return float(tree.query(pm @ np.array([[c, s], [-s, c]]))[0].max())
+
+    grid = np.linspace(0.0, 2 * math.pi / male.lobes, 721)
+    a = grid[int(np.argmin([spread(x) for x in grid]))]
+    for step in (1e-3, 1e-5, 1e-7):
+        a = min(np.linspace(a - 10 * step, a + 10 * step, 41), key=spread)
+    return a, spread(a)
+
+
+def test_one_tool_cuts_both_rotors(pair):
+    """Female and male are one rotor: some turn lays one onto the other (the polygons'
+    edges are at most 0.2 mm with 0.05 um sag, so their vertices lie within 0.1 mm of
+    the other polygon's; a wrong rotor stays millimetres away)."""
+    _, male, female = pair
+    _, left = _turn_between(male, female)
+    assert left < 1e-4
+    assert male.area == pytest.approx(female.area, rel=1e-9)
+
+
+def test_an_unequal_circular_pair_is_not_one_rotor():
+    """The measure can fail: the circular rack's default (female tip circle centred on
+    the pitch line) for unequal diameters gives two different rotors."""
+    pair = build("circular", 1, 1, C, 0.100, 0.098)
+    _, left = _turn_between(pair.male, pair.female)
+    assert left > 1e-3
+
+
+@pytest.mark.parametrize("n, R", [(1, 0.055), (2, 0.050)])
+def test_trochoidal_radii_and_corner_trace(n, R):
+    g, male, _ = trochoidal(n, R)
+    r = np.linalg.norm(polygon(male), axis=1)
+    assert r.max() == pytest.approx(R, abs=1e-9)
+    assert r.min() == pytest.approx(C - R, abs=1e-9)
+    # the flank from the root to the tip is the mate's corner seen from this rotor,
+    # |X(t)|^2 = C^2 + R^2 - 2 C R cos t from t = 0 (radius C - R) to cos t = C / 2R
+    flank = male.pieces[0]
+    t = np.linspace(0.0, 1.0, 101)
+    radius = np.linalg.norm(flank.eval(t), axis=1)
+    turn = np.linspace(0.0, math.acos(C / (2 * R)), 101)
+    assert radius == pytest.approx(np.sqrt(C**2 + R**2 - 2 * C * R * np.cos(turn)), abs=1e-12)
+
+
+@pytest.mark.parametrize("args, word", [
+    ((1, 2, 0.110, 0.110), "lobes"),
+    ((1, 1, 0.110, 0.100), "diameter"),
+    ((1, 1, 0.070, 0.070), "pitch circle"),
+    ((1, 1, 0.160, 0.160), "outer radius"),
+])
+def test_bad_trochoidal_pairs_are_named(args, word):
+    n1, n2, d1, d2 = args
+    with pytest.raises(CaseError, match=word):
+        build("trochoidal", n1, n2, C, d1, d2)
+
+
+def test_bad_pump_case_exits_2_naming_the_key(tmp_path):
+    case = tmp_path / "pump.toml"
+    case.write_text(
+        '[machine]\ntype = "twin-screw"\nprofile = "trochoidal"\nlobes_male = 1\n'
+        'lobes_female = 1\ncentre_distance_mm = 78\nmale_diameter_mm = 110\n'
+        'female_diameter_mm = 110\nlength_mm = 200\ntip_radius_mm = 5\n'
+        '[sweep]\nkind = "helical"\nwrap_male_deg = 1080\n')
+    out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", "geometry",
+                          str(case)], capture_output=True, text=True)
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "tip_radius_mm" in lines[0]

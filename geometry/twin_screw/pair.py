@@ -138,9 +138,17 @@ class TwinScrewPair(RotorPair):
         polar angle (the lobe's centre line on a symmetric lobe)."""
         return self._lands[0 if profile is self.male else 1]
 
+    #: Profiles whose lands are treated as lands (:mod:`.lands`).  The pin-cycloid
+    #: female's tip is an arc on its bore too, but keeps the tip-point treatment its
+    #: published figures were checked with until its lands are validated.
+    LAND_PROFILES = ("trochoidal",)
+
     @cached_property
     def _lands(self):
         from .lands import find_land
+
+        if self.label not in self.LAND_PROFILES:
+            return (None, None)
 
         return tuple(find_land(p, self.gearing.centre_distance)
                      for p in (self.male, self.female))

@@ -122,10 +122,9 @@ def rotor_machine(case, *, with_speed: bool = True) -> RotorMachine:
         return RotorMachine(case.pair)
     driven = case.driven
     if driven == "auto":
-        from rotorflow.geometry.forces import power_split
-        from rotorflow.geometry.summary import build_machine
+        from rotorflow.geometry.summary import build_machine, case_power_split
 
-        driven = power_split(build_machine(case), case.volume_ratio).driven
+        driven = case_power_split(case, build_machine(case)).driven
     # the reference (outer) rotor turns N_driven / N_reference times as fast as the driven
     ratio = 1.0 / case.pair.rotor(driven).speed_ratio
     return RotorMachine(case.pair, float(speed) * ratio * math.pi / 30.0)

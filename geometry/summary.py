@@ -115,9 +115,11 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     load_columns.update({opening_column(name, d): v for (name, d), v in openings.items()})
     load_columns.update(pair.face_columns(m))
     area_lp, area_hp = cur.area_lp, cur.area_hp
+    timing = {}
     if getattr(pair, "port_areas", False):
         area_lp, area_hp, parts = _port_areas(case, m)
         load_columns.update(parts)
+        timing = _timing_scalars(case, m)
     paths = pair.leakage_paths(far, tracks, openings)
     return ChamberTable(
         angle_rad=cur.phi - cur.phi[0],
@@ -141,6 +143,7 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
         speed_ratios=tuple(float(r.speed_ratio) for r in pair.rotors),
         rotor_scalars=rotor_scalars,
         oil_films=pair.oil_films(paths),
+        port_timing=timing,
     )
 
 
@@ -168,6 +171,16 @@ def _port_areas(case, m: SweptMachine):
         return area_lp, axial, {}
     radial = m.pair.radial_port(m, timing).open_area(ages)
     return area_lp, axial + radial, {"area_hp_axial_m2": axial, "area_hp_radial_m2": radial}
+
+
+def _timing_scalars(case, m: SweptMachine) -> dict[str, float]:
+    """The port timing the table's port areas follow, for the quasi-1D model to read
+    (:func:`rotorflow.quasi1d.chamber.prepare`): one rule, :func:`.ports.port_timing`."""
+    t = _timing(case, m)
+    op = case.raw.get("operating", {})
+    return {"suction_close_rad": t.suction_close, "discharge_open_rad": t.discharge_open,
+            "volume_ratio": float(case.volume_ratio),
+            "early_opening_rad": math.radians(float(op.get("discharge_early_opening_deg", 0.0)))}
 
 
 def _timing(case, m: SweptMachine):

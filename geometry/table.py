@@ -254,6 +254,11 @@ class ChamberTable:
     """end_area_NAME_m2, axial_per_torque_NAME_per_m where defined."""
     oil_films: tuple = ()
     """The rotor surfaces that shear an oil film against the casing (:mod:`.films`)."""
+    port_timing: dict[str, float] = field(default_factory=dict)
+    """The geometry's port timing, where its port areas follow one
+    (:func:`..ports.port_timing`): ``suction_close_rad``, ``discharge_open_rad`` (ages)
+    and the ``volume_ratio`` and ``early_opening_rad`` it was made for; the quasi-1D model
+    reads it rather than re-deriving it ({}: none, the model derives its own)."""
 
     @property
     def paths(self) -> tuple[LeakagePath, ...]:
@@ -332,6 +337,8 @@ def write(table: ChamberTable, csv_path: Path) -> None:
     side["leakage_paths"] = [p.to_dict() for p in table.paths]
     if table.oil_films:
         side["oil_films"] = [f.to_dict() for f in table.oil_films]
+    if table.port_timing:
+        side["port_timing"] = dict(table.port_timing)
     csv_path.with_suffix(".json").write_text(json.dumps(side, indent=2) + "\n")
 
 
@@ -384,6 +391,7 @@ def read(csv_path: Path) -> ChamberTable:
         speed_ratios=tuple(float(x) for x in meta.get("speed_ratios", ())),
         rotor_scalars=per_rotor,
         oil_films=films,
+        port_timing={str(k): float(v) for k, v in meta.get("port_timing", {}).items()},
     )
 
 

@@ -12,6 +12,14 @@ Timing, in outer-rotor angle since birth (the table's ``angle_rad``):
                    case's explicit angle
     death          where V last exceeds vanish_fraction * V_max
 
+A table whose port areas follow the geometry's port timing carries it
+(``table.port_timing``, :func:`rotorflow.geometry.ports.port_timing`: with a transport
+plateau, seed 003's screw pumps, suction closes at the plateau's start and, at
+``volume_ratio = 1``, the discharge opens at its end).  That timing is read, not
+re-derived, when it was made for the volume ratio and early opening asked here and the
+case gives no explicit angle; the rules above are the fallback for tables without one
+(the internal gear's, synthetic ones).
+
 A chamber is handed in at birth with the suction state and handed over at death to the
 discharge plenum, with its mass, energy and p V booked, so that a vanishing volume is
 never divided by.
@@ -122,6 +130,10 @@ def prepare(table, volume_ratio, suction_close, discharge_open, speed_rpm,
     thr = vanish_fraction * vmax
     birth = float(a[0]) if V[0] >= thr else _crossing(geo, a, V, thr, 0, imax)
     death = float(a[-1]) if V[-1] >= thr else _crossing(geo, a, V, thr, imax, a.size - 1)
+    given = _table_timing(table, volume_ratio, early_opening)
+    if given is not None:
+        suction_close = given[0] if suction_close is None else suction_close
+        discharge_open = given[1] if discharge_open is None else discharge_open
     sc = float(a[imax]) if suction_close is None else float(suction_close)
     if not birth < sc < death:
         raise CaseError(f"suction port closing at {math.degrees(sc):.1f} deg lies outside the "
@@ -139,13 +151,28 @@ def prepare(table, volume_ratio, suction_close, discharge_open, speed_rpm,
                             "lower volume_ratio or set suction_close_deg")
     else:
         do = float(discharge_open)
-        if not sc < do < death:
+        # Without internal compression or transport, suction closes and the discharge
+        # opens at one angle, the volume maximum (the geometry's port timing).
+        if not (sc < do < death or (sc == do < death and given is not None)):
             raise CaseError(f"discharge port opening at {math.degrees(do):.1f} deg must lie "
                             f"between suction closing and the chamber's death")
     omega = 2.0 * math.pi * speed_rpm / 60.0 * table.speed_ratio_outer_per_driven
     return ChamberGeometry(a, coef, period, table.lobes_outer, vmax, birth, death, sc, do,
                            float(geo.volume(sc)), float(geo.volume(do)), omega,
                            0.5 * float(table.diameter_m), tuple(names), paths)
+
+
+def _table_timing(table, volume_ratio, early_opening) -> tuple[float, float] | None:
+    """(suction close, discharge open) of the table's own port timing, if it has one made
+    for this volume ratio and early opening (else None: derive)."""
+    t = getattr(table, "port_timing", None) or {}
+    if not {"suction_close_rad", "discharge_open_rad", "volume_ratio"} <= set(t):
+        return None
+    if volume_ratio is None or float(t["volume_ratio"]) != float(volume_ratio):
+        return None
+    if abs(float(t.get("early_opening_rad", 0.0)) - float(early_opening)) > 1e-12:
+        return None
+    return float(t["suction_close_rad"]), float(t["discharge_open_rad"])
 
 
 def _declared_paths(table) -> tuple:

@@ -205,6 +205,8 @@ class Boundaries:
         """The end of rotor r's wetted arc at polygon vertex x where it meets a bore (the
         lobe's tip point); None where it meets the other rotor (a contact, resolved per
         overlap by :meth:`_contacts`); x itself where it meets the cusp line."""
+        if self._lands[r]:
+            return self._snap_land(r, x, neighbour, psi, part)
         if neighbour in (BORE_M, BORE_F):
             tips = self.rotor_at(r, self._rotor_data[r].tips, psi)
             k = int(np.argmin(np.linalg.norm(tips - x, axis=-1)))
@@ -222,6 +224,62 @@ class Boundaries:
             if d[k] < TIP_MATCH * self.C or self._in_tip_band(r, k, x, psi):
                 return tips[k]
         return x
+
+    def _snap_land(self, r, x, neighbour, psi, part):
+        """:meth:`_snap_tip` on a rotor with lands (arcs on its bore, :meth:`.TwinScrewPair
+        ._land`).  A groove meets its bore at a land's corner (its sealing point, booked as
+        the lobe's tip), a land crossing the cusp meets the other bore at the cusp point.
+        Beyond either lies a gap, the land's arc on its own bore, whose pressure falls from
+        one side's to the other's: each side loads it up to its middle (uniform pressure
+        then loads the rotor all round, as a tip point's rotor is; a land's arc about the
+        axis has no torque, so the shaft power is the same either way)."""
+        if neighbour in (MALE, FEMALE):
+            return (None, x) if neighbour != r else x
+        corners = self.rotor_at(r, self._rotor_data[r].corners, psi)
+        d = np.linalg.norm(corners - x, axis=-1)
+        j = int(np.argmin(d))
+        cusps = np.array([[self.xc, self.yc], [self.xc, -self.yc]])
+        dc = np.linalg.norm(cusps - x, axis=-1)
+        i = int(np.argmin(dc))
+        if neighbour == CUSP:
+            if min(d[j], dc[i]) > TIP_MATCH * self.C:
+                return x
+            return cusps[i] if dc[i] < d[j] else corners[j]
+        end = cusps[i] if dc[i] < d[j] else corners[j]
+        if dc[i] >= d[j]:
+            part.tips.append((r, j // 2, corners[j]))
+        return self.gap_middle(r, end, j // 2, psi)
+
+    def gap_middle(self, r, end, lobe, psi):
+        """The middle of the gap (lobe ``lobe``'s land on rotor r's own bore, outside the
+        other bore) that begins at ``end``, a corner or a cusp point (fixed frame)."""
+        o = self.O[r]
+        lo, hi = self._rotor_data[r].corners[2 * lobe:2 * lobe + 2]
+        turn = psi if r == MALE else self.female_angle(psi)
+        ta = math.atan2(lo[1], lo[0]) + turn
+        span = math.remainder(math.atan2(hi[1], hi[0]) - math.atan2(lo[1], lo[0]),
+                              2.0 * math.pi) % (2.0 * math.pi)
+        gamma = self._cusp_angle[r]
+        towards = 0.0 if r == MALE else math.pi  # the other axis, from this one
+        cuts = [0.0, span]
+        for c in (towards - gamma, towards + gamma):
+            off = (c - ta) % (2.0 * math.pi)
+            if 0.0 < off < span:
+                cuts.append(off)
+        cuts.sort()
+        e = math.atan2(end[1] - o[1], end[0] - o[0])
+        k = int(np.argmin([abs(math.remainder(ta + c - e, 2.0 * math.pi)) for c in cuts]))
+        for a, b in ((cuts[k], cuts[min(k + 1, len(cuts) - 1)]),
+                     (cuts[max(k - 1, 0)], cuts[k])):
+            mid = ta + 0.5 * (a + b)
+            if b > a and abs(math.remainder(mid - towards, 2.0 * math.pi)) > gamma:
+                return o + self.R[r] * np.array([math.cos(mid), math.sin(mid)])
+        return end  # no gap beside it (the land lies in the lens there)
+
+    @cached_property
+    def _lands(self) -> tuple[bool, bool]:
+        pair = self.pair
+        return tuple(pair._land(p) is not None for p in (pair.male, pair.female))
 
     def _in_tip_band(self, r, k, x, psi) -> bool:
         """Whether x lies on rotor r's bore next to tip k where the rotor runs within

@@ -118,7 +118,10 @@ class TwinScrewPair(RotorPair):
         return x, math.sqrt(r1 * r1 - x * x)
 
     def _tip(self, profile: TwinProfile) -> tuple[float, float]:
-        """(u, radius) of lobe 0's tip: its largest radius, polished."""
+        """(u, radius) of lobe 0's tip: its largest radius, polished (a land's middle)."""
+        land = self._land(profile)
+        if land is not None:
+            return land[0], land[1]
         per = len(profile.pieces)
         u = np.linspace(0.0, per, TIP_SCAN * per, endpoint=False)
         r = np.linalg.norm(profile.point(u), axis=-1)
@@ -128,6 +131,52 @@ class TwinScrewPair(RotorPair):
                               bounds=(u[k] - h, u[k] + h), method="bounded",
                               options={"xatol": 1e-13})
         return float(res.x), -float(res.fun)
+
+    def _land(self, profile: TwinProfile):
+        """(u of its middle, radius, (u_cw, u_ccw) of its corners) of lobe 0's land, or
+        None for a lobe with a tip point (LAND_TOL).  The middle is the land's middle by
+        polar angle (the lobe's centre line on a symmetric lobe)."""
+        return self._lands[0 if profile is self.male else 1]
+
+    #: Profiles whose lands are treated as lands (:mod:`.lands`).  The pin-cycloid
+    #: female's tip is an arc on its bore too, but keeps the tip-point treatment its
+    #: published figures were checked with until its lands are validated.
+    LAND_PROFILES = ("trochoidal",)
+
+    @cached_property
+    def _lands(self):
+        from .lands import find_land
+
+        if self.label not in self.LAND_PROFILES:
+            return (None, None)
+
+        return tuple(find_land(p, self.gearing.centre_distance)
+                     for p in (self.male, self.female))
+
+    @property
+    def has_lands(self) -> bool:
+        return any(land is not None for land in self._lands)
+
+    def corner_points(self, profile: TwinProfile) -> np.ndarray:
+        """Where the grooves meet the bore, rotor frame: per lobe its clockwise and its
+        counter-clockwise land corner ((2 N, 2), lobe order) on a rotor with lands, its
+        tip point ((N, 2)) otherwise."""
+        land = self._land(profile)
+        if land is None:
+            return self.tip_points(profile)
+        ends = profile.point(np.array(land[2]))
+        turns = TWO_PI * np.arange(profile.lobes) / profile.lobes
+        return np.concatenate([rotate(ends, t) for t in turns])
+
+    def land_half_width(self, rotor: int) -> float:
+        """Half the polar angle a lobe's land spans (0 for a tip point)."""
+        profile = self.male if rotor == 0 else self.female
+        land = self._land(profile)
+        if land is None:
+            return 0.0
+        a, b = profile.point(np.array(land[2]))
+        return 0.5 * abs(math.remainder(math.atan2(b[1], b[0]) - math.atan2(a[1], a[0]),
+                                        TWO_PI))
 
     def tip_points(self, profile: TwinProfile) -> np.ndarray:
         """Every lobe's tip point in the rotor's own frame, lobe order."""

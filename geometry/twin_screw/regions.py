@@ -77,6 +77,7 @@ class _Rotor:
     sliver: np.ndarray  # per edge j (vertex j to j + 1): area between curve and chord
     length: np.ndarray  # per edge: the curve's length
     u: np.ndarray  # the profile parameter of each vertex
+    corners: np.ndarray  # where grooves meet the bore (:meth:`.TwinScrewPair.corner_points`)
 
 
 def _slivers(profile, u):
@@ -150,7 +151,7 @@ class SectionCutter(Boundaries):
             sliver, length = _slivers(profile, u)
             grown = p + GROW * self.C * profile.normal(u)
             out.append(_Rotor(grown, cKDTree(grown), self.pair.tip_points(profile),
-                              sliver, length, u))
+                              sliver, length, u, self.pair.corner_points(profile)))
         return out
 
     @cached_property
@@ -260,6 +261,22 @@ class SectionCutter(Boundaries):
         tips = self.rotor_at(rotor, self._rotor_data[rotor].tips, psi)
         # The groove is the one between the two tips its boundary passes (its centroid
         # may lie beyond a tip's ray under a hooked flank).
+        if self._lands[rotor]:
+            # Groove k runs from lobe k's counter-clockwise land corner (2 k + 1) to lobe
+            # k + 1's clockwise one; its ring passes through both.
+            corners = self.rotor_at(rotor, self._rotor_data[rotor].corners, psi)
+            near = np.min(np.linalg.norm(rings[0][None, :, :] - corners[1::2, None, :],
+                                         axis=-1), 1)
+            groove, age = self._groove_age(rotor, rings, psi, "", groove=int(np.argmin(near)))
+            a, b = corners[(2 * groove + 2) % (2 * n)], corners[2 * groove + 1]
+            # loads up to the middles of the gaps beyond the corners (Boundaries._snap_land)
+            fa = self.gap_middle(rotor, a, (groove + 1) % n, psi)
+            fb = self.gap_middle(rotor, b, groove, psi)
+            force = np.zeros((2, 2))
+            force[rotor] = (fb[1] - fa[1], -(fb[0] - fa[0]))
+            return Part(rotor, groove, age, ref.area, force, np.zeros(2), ref.perimeter.copy(),
+                        tips=[(rotor, (groove + 1) % n, a), (rotor, groove, b)], side="",
+                        polygons=rings)
         near = np.min(np.linalg.norm(rings[0][None, :, :] - tips[:, None, :], axis=-1), 1)
         pair = sorted(np.argsort(near)[:2])  # one tip only on a one-lobe rotor
         k = pair[1] if n > 2 and (pair[0], pair[1]) == (0, n - 1) else pair[0]

@@ -79,6 +79,20 @@ def _female_shift(pair, parts_by_section, psis) -> float:
                 qm = (both[MALE].age - psi - b0) / period
                 qf = (both[FEMALE].age - psi - b0) / period - frac
                 return -(frac + round(qf - qm)) * period
+    # Lands (the screw pumps' trochoidal profile): one rotor's land covers each cusp at
+    # every angle, so no piece reaches a cusp; the male and female grooves of a chamber
+    # meet in the mesh instead, through the space between their flanks, which straddles
+    # the cusp line (its two halves are one fluid in that section).
+    if pair.has_lands:
+        for psi, parts in zip(psis, parts_by_section, strict=True):
+            by_piece = defaultdict(dict)
+            for p in parts:
+                by_piece[p.piece].setdefault(p.rotor, p)
+            for both in by_piece.values():
+                if MALE in both and FEMALE in both:
+                    qm = (both[MALE].age - psi - b0) / period
+                    qf = (both[FEMALE].age - psi - b0) / period - frac
+                    return -(frac + round(qf - qm)) * period
     raise CaseError("no section shows a male and a female groove meeting at the "
                     "discharge-side cusp: the profiles do not form working chambers")
 

@@ -31,7 +31,8 @@ from rotorflow.geometry.machine import SweptMachine, _extend
 from rotorflow.geometry.ports import port_timing
 from rotorflow.geometry.sweep import Sweep
 from rotorflow.geometry.twin_screw.contact_line import contact_line_length
-from rotorflow.geometry.twin_screw.family import build
+from rotorflow.geometry.twin_screw.family import build, centred_tip_radius
+from rotorflow.geometry.twin_screw.meshing import Gearing
 
 #: lobes -> (rotor length, male wrap in degrees): the 1/1 pump wraps three turns (its
 #: chamber's planar life is 825 deg, so it transports for 255 deg), the 2/2 less.
@@ -41,7 +42,13 @@ PPP = 48  # coarse: every invariant below holds at any resolution but the power 
 
 @functools.cache
 def pair(lobes: int):
-    return build("circular", lobes, lobes, 0.078, 0.100, 0.100)
+    """The circular rack whose female tip circle is centred on the pitch line (the
+    compressor default; with equal lobes and diameters the family now defaults to the
+    rack of equal circles, whose identical rotors test_pump_profiles checks)."""
+    g = Gearing(0.078, lobes, lobes)
+    h = 0.050 - g.r1
+    return build("circular", lobes, lobes, 0.078, 0.100, 0.100,
+                 tip_radius=centred_tip_radius(g, h, h))
 
 
 @functools.cache

@@ -31,7 +31,7 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from .coolprop_table import build_nodes, reachable_box, suction_state
+from .coolprop_table import build_nodes, dew_temperature, reachable_box, suction_state
 
 # Grid of the property table: 200 x 200 nodes in (ln rho, u); builds in ~1 s.  The
 # interpolation error (module docstring) is set by the cells the saturation line crosses;
@@ -179,11 +179,17 @@ class TabulatedFluid:
         return self._upd("PSmass_INPUTS", p2, s1).hmass() - h1
 
     def work_isothermal(self, p1, T1, p2, q: float | None = None):
-        """(h2 - h1) - T1 (s2 - s1) at T1 from p1 to p2 (the end state may be liquid:
-        isothermal compression of a vapour below its saturation temperature at p2
-        condenses it); from (p1, quality q) for a wet suction."""
+        """(h2 - h1) - T1 (s2 - s1) at T1 from p1 to p2; from (p1, quality q) for a wet
+        suction.  None where the isotherm reaches the saturation line on the way (T1 below
+        the critical temperature and p2 at or above the dew pressure at T1; a wet suction
+        always): the reversible isothermal path then condenses the vapour, and the
+        efficiency against it compares a compressor with a condenser (R134a at 3 bar /
+        285 K -> 9 bar: 0.27).  A supercritical isotherm (CoolProp air, CO2 sucked above
+        304 K) never does."""
         st = self._start(p1, T1, q)
         h1, s1, T1 = st.hmass(), st.smass(), st.T()
+        if q is not None or (T1 < st.T_critical() and p2 >= self._upd("QT_INPUTS", 1.0, T1).p()):
+            return None
         st = self._upd("PT_INPUTS", p2, T1)
         return (st.hmass() - h1) - T1 * (st.smass() - s1)
 
@@ -199,13 +205,32 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
             raise CaseError(
                 f"T_suction_K = {Ts:g} is not the saturation temperature of {name} at "
                 f"{ps / 1e5:g} bar ({Tsat:.2f} K) that suction_quality = {qs:g} implies")
+    else:
+        Tsat = dew_temperature(name, ps)
+        if Tsat is not None and Ts <= Tsat + SATURATION_T_TOLERANCE_K:
+            state = "subcooled liquid" if Ts < Tsat - SATURATION_T_TOLERANCE_K else "saturated"
+            raise CaseError(
+                f"suction of {name} at {ps / 1e5:g} bar and T_suction_K = {Ts:g} is {state}: "
+                f"the saturation temperature there is {Tsat:.2f} K; a dry suction needs "
+                f"T_suction_K above it, a wet one suction_quality in (0, 1] "
+                f"(1: saturated vapour)")
     try:
         box = reachable_box(name, ps, pd, Ts, qs, Tw, To, vr)
     except ValueError as exc:
         raise CaseError(f"CoolProp {name} cannot evaluate the operating point: {exc}") from None
-    return TabulatedFluid.build(name, *box, nodes=nodes)
+    fluid = TabulatedFluid.build(name, *box, nodes=nodes)
+    rho_s, u_s = suction_state(name, ps, Ts, qs)[:2]
+    if not fluid.in_range(np.array([rho_s]), np.array([u_s])):
+        # the pseudo-pure blends (R410A, R404A, R507A): CoolProp has no (rho, u) flash
+        # inside their dome, so a wet suction has no table cells
+        raise CaseError(f"CoolProp's {name} cannot be evaluated by (density, energy) at the "
+                        f"suction state (its two-phase flash fails for pseudo-pure blends): "
+                        f"give a superheated suction")
+    return fluid
 
 
 # A wet suction's T_suction_K must be the saturation temperature at p_suction within this:
 # 0.1 K allows the figure rounded to one decimal; a larger difference is another state.
+# A dry suction must lie this far above it: closer, (p, T) barely fixes the state (the
+# flash is singular on the saturation line), and saturated vapour is suction_quality = 1.
 SATURATION_T_TOLERANCE_K = 0.1

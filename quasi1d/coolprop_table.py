@@ -41,6 +41,10 @@ FD_STEP = 1.0e-6
 
 # Margins of the reachable range (see reachable_box).
 P_LOW_FRACTION = 0.01  # deep under-pressure: a leaking vacuum chamber, a throttled suction
+# ... but not below the triple point: CO2's (5.2 bar) lies above 1 % of a 35 bar suction,
+# and below it the fluid would freeze, which the equation of state does not describe.
+# 1 % above it so that the expanded suction isentrope stays in the fluid region.
+P_TRIPLE_MARGIN = 1.01
 P_HIGH_FACTOR = 3.0  # over-compression and throttled discharge above max(pd, built-in end)
 HOT_RISE_FACTOR = 2.0  # recompressed leakage: up to 3x the isentropic rise above suction
 # CoolProp's (rho, u) flash fails above ~1.5 x the equation of state's Tmax (R134a: 682 K
@@ -70,11 +74,24 @@ def suction_state(name: str, ps: float, Ts: float, qs: float | None):
     return st.rhomass(), st.umass(), st.hmass(), st.smass(), st.T()
 
 
+def dew_temperature(name: str, p: float) -> float | None:
+    """The saturated vapour's temperature at p (the dew point of a pseudo-pure blend),
+    None at or above the critical pressure (no dome to fall into)."""
+    import CoolProp.CoolProp as CP
+
+    st = _state(name)
+    if p >= st.p_critical():
+        return None
+    st.update(CP.PQ_INPUTS, p, 1.0)
+    return st.T()
+
+
 def reachable_box(name, ps, pd, Ts, qs, Tw, To, vr):
     """(rho_lo, rho_hi, u_lo, u_hi) of the table for suction (ps, Ts or quality qs),
     discharge pressure pd, wall and oil temperatures Tw, To and volume ratio vr.
 
-    Pressures from P_LOW_FRACTION x ps to P_HIGH_FACTOR x the larger of pd and the end
+    Pressures from P_LOW_FRACTION x ps (at least P_TRIPLE_MARGIN x the triple-point
+    pressure) to P_HIGH_FACTOR x the larger of pd and the end
     pressure of the built-in compression (the suction isentrope at vr x the suction
     density).  Internal energy from the coldest of: the suction isentrope expanded to the
     lowest pressure, the coldest boundary temperature at the highest density (inside the
@@ -90,7 +107,7 @@ def reachable_box(name, ps, pd, Ts, qs, Tw, To, vr):
     st.update(CP.DmassSmass_INPUTS, rho_s * vr, s_s)
     p_end = st.p()
     p_hi = P_HIGH_FACTOR * max(pd, p_end)
-    p_lo = P_LOW_FRACTION * ps
+    p_lo = max(P_LOW_FRACTION * ps, P_TRIPLE_MARGIN * st.trivial_keyed_output(CP.iP_triple))
     st.update(CP.PSmass_INPUTS, max(pd, p_end), s_s)
     T_end = st.T()
     T_hi = min(max(T_end, Tw, To) + HOT_RISE_FACTOR * (T_end - T_s),

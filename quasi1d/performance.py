@@ -10,7 +10,11 @@ Definitions (per lobe period = one chamber's cycle, t_P = period / omega_outer):
     volumetric_efficiency       mass per cycle / (suction density * V at suction closing):
                                 the trapped volume, seed 001's "suction volume" (30 cc)
     adiabatic_efficiency        mass flow * isentropic work (p_suc, T_suc -> p_dis) / power
-    isothermal_efficiency       mass flow * isothermal work at T_suc / power
+    isothermal_efficiency       mass flow * isothermal work at T_suc / power; None for a
+                                condensable fluid whose isotherm from suction reaches the
+                                saturation line before p_dis (every refrigeration point:
+                                the reversible isothermal path would condense the vapour,
+                                a condenser's work, not a compressor's; and a wet suction)
     discharge_temperature_K     temperature of the delivered gas at its mean enthalpy
     discharge_mixture_temperature_K  (oil injected) the delivered gas and oil mixed to one
                                 temperature (what a thermometer in the discharge line of an
@@ -67,7 +71,7 @@ def figures(sol: CycleSolution) -> dict:
         "specific_power_J_kg": ratio(power, mdot),
         "volumetric_efficiency": float(a[ACC_M_SUC] / (rho_s * geo.v_trapped)),
         "adiabatic_efficiency": ratio(mdot * w_is, power),
-        "isothermal_efficiency": ratio(mdot * w_it, power),
+        "isothermal_efficiency": None if w_it is None else ratio(mdot * w_it, power),
         "discharge_temperature_K": T_dis,
         "discharge_mixture_temperature_K": _mixture_T(model, a, T_dis),
         "heat_to_gas_W": float(a[ACC_Q] / t_period),

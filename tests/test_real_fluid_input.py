@@ -1,0 +1,99 @@
+"""Bad input for a real fluid (issue 14): exit status 2, one line on stderr naming the
+problem, nothing written.  The cases are examples/refrigeration_r134a.toml (R134a,
+3 bar: saturation temperature 273.82 K) with one key changed.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import CoolProp.CoolProp as CP
+import pytest
+
+from rotorflow.errors import CaseError
+from rotorflow.quasi1d.coolprop_fluid import SATURATION_T_TOLERANCE_K, tabulated
+
+from .conftest import CASES
+
+R134A_CASE = CASES / "refrigeration_r134a.toml"
+TSAT_3BAR = CP.PropsSI("T", "P", 3e5, "Q", 1.0, "R134a")  # 273.82 K
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", *map(str, args)],
+                          capture_output=True, text=True)
+
+
+def _refused(tmp_path, text):
+    """Run `rotorflow simulate` on ``text``; the one line of stderr when it exits 2 having
+    written nothing."""
+    case = tmp_path / "case.toml"
+    case.write_text(text)
+    traces = tmp_path / "traces"
+    out = _cli("simulate", case, "--json", "--traces", traces)
+    assert out.returncode == 2 and out.stdout == "", out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1, out.stderr
+    assert not traces.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["case.toml"]
+    return lines[0]
+
+
+def _case(old, new, base=R134A_CASE):
+    text = base.read_text()
+    assert old in text
+    return text.replace(old, new)
+
+
+@pytest.mark.parametrize("T, state", [(270.0, "subcooled liquid"), (273.82, "saturated"),
+                                      (273.9, "saturated")])
+def test_dry_suction_inside_the_dome_or_liquid_is_refused(tmp_path, T, state):
+    # No suction_quality: the suction must be superheated vapour.  At 3 bar R134a
+    # saturates at 273.82 K: 270 K is liquid, 273.82 K on the line (CoolProp's (p, T)
+    # flash is singular there), 273.9 K within SATURATION_T_TOLERANCE_K of it.  The line
+    # names the saturation temperature, so the user sees how far off the input is.
+    line = _refused(tmp_path, _case("T_suction_K = 285", f"T_suction_K = {T}"))
+    assert "T_suction_K" in line and state in line and f"{TSAT_3BAR:.2f} K" in line, line
+
+
+def test_dry_suction_just_above_saturation_is_accepted():
+    # The other side of the check: 2 tolerances above the saturation temperature is a
+    # (barely) superheated vapour, and its table is built.
+    T = round(TSAT_3BAR + 2 * SATURATION_T_TOLERANCE_K, 2)
+    rho, u = (CP.PropsSI(k, "P", 3e5, "T", T, "R134a") for k in ("Dmass", "Umass"))
+    assert tabulated("R134a", 3e5, 9e5, T, T, T, 2.7).in_range([rho], [u])
+    with pytest.raises(CaseError, match="saturated"):
+        tabulated("R134a", 3e5, 9e5, TSAT_3BAR, TSAT_3BAR, TSAT_3BAR, 2.7)
+
+
+def test_supercritical_suction_has_no_dome_to_refuse():
+    # Above the critical pressure there is no saturation temperature: CO2 at 80 bar and
+    # 300 K (below its critical 304.1 K: a dense supercritical fluid) is not refused as
+    # "liquid"; the check applies below the critical pressure only.
+    assert tabulated("CO2", 80e5, 120e5, 300.0, 300.0, 300.0, 1.3).name == "CO2"
+
+
+@pytest.mark.parametrize("q", ["0", "-0.2", "1.5"])
+def test_suction_quality_outside_zero_one_is_refused(tmp_path, q):
+    line = _refused(tmp_path, _case("T_suction_K = 285",
+                                    f"T_suction_K = 273.82\nsuction_quality = {q}"))
+    assert "suction_quality" in line and q in line, line
+
+
+def test_unknown_coolprop_mixture_name_is_refused(tmp_path):
+    # (An unknown pure fluid, R9999, is tests/test_quasi1d_real_fluid.py's.)
+    line = _refused(tmp_path, _case('fluid = "CoolProp::R134a"', 'fluid = "CoolProp::R410X"'))
+    assert "CoolProp::R410X" in line, line
+
+
+def test_wet_suction_of_a_pseudo_pure_blend_is_refused(tmp_path):
+    # CoolProp's R410A is a pseudo-pure fluid whose (rho, u) flash fails inside the dome:
+    # a wet suction has no table cells.  Refused in one line (it was a traceback from
+    # the chamber's first state).
+    text = _case('fluid = "CoolProp::R134a"', 'fluid = "CoolProp::R410A"')
+    text = text.replace("p_suction_bar = 3.0", "p_suction_bar = 8.0").replace(
+        "p_discharge_bar = 9.0", "p_discharge_bar = 24.0")
+    Tsat = CP.PropsSI("T", "P", 8e5, "Q", 0.97, "R410A")
+    line = _refused(tmp_path, text.replace(
+        "T_suction_K = 285", f"T_suction_K = {Tsat:.2f}\nsuction_quality = 0.97"))
+    assert "R410A" in line and "superheated" in line, line

@@ -15,6 +15,7 @@ MODULES = (
     "bench.bench_solids",
     "bench.bench_cfd",
     "bench.bench_workflow",
+    "bench.bench_optimise",
 )
 
 

@@ -84,9 +84,9 @@ def _algorithm(spec: OptimiseSpec):
                  eliminate_duplicates=dedup)
 
 
-def search(spec: OptimiseSpec, dispatch: Dispatch) -> tuple[list[dict], list[int]]:
-    """Every evaluated design (one row each, in the order asked), and the number of
-    rows after each generation."""
+def search(spec: OptimiseSpec, dispatch: Dispatch) -> tuple[list[dict], list[tuple]]:
+    """Every evaluated design (one row each, in the order asked), and after each
+    generation the number of rows and the seconds since the search began."""
     from pymoo.core.evaluator import Evaluator
     from pymoo.problems.static import StaticProblem
 
@@ -95,7 +95,8 @@ def search(spec: OptimiseSpec, dispatch: Dispatch) -> tuple[list[dict], list[int
     algorithm.setup(problem, termination=("n_gen", spec.generations), seed=spec.seed,
                     verbose=False)
     rows: list[dict] = []
-    ends: list[int] = []
+    ends: list[tuple[int, float]] = []
+    t0 = time.perf_counter()
     while algorithm.has_next():
         pop = algorithm.ask()
         designs = [design_values(spec, x) for x in pop.get("X")]
@@ -104,7 +105,7 @@ def search(spec: OptimiseSpec, dispatch: Dispatch) -> tuple[list[dict], list[int
         Evaluator().eval(StaticProblem(problem, F=F, G=G), pop)
         algorithm.tell(infills=pop)
         rows += batch
-        ends.append(len(rows))
+        ends.append((len(rows), round(time.perf_counter() - t0, 3)))
     return rows, ends
 
 

@@ -65,18 +65,19 @@ def reference_point(spec: OptimiseSpec, rows: list[dict]) -> np.ndarray | None:
     return hi + REFERENCE_MARGIN * np.where(hi > lo, hi - lo, np.maximum(abs(hi), 1.0))
 
 
-def hypervolumes(spec: OptimiseSpec, rows: list[dict], ends: list[int]) -> list[dict]:
-    """The hypervolume of the feasible designs found up to each generation."""
+def hypervolumes(spec: OptimiseSpec, rows: list[dict], ends: list[tuple]) -> list[dict]:
+    """The hypervolume of the feasible designs found up to each generation, with the
+    seconds the search had taken by then (``ends``: rows and seconds per generation)."""
     from pymoo.indicators.hv import HV
 
     ref = reference_point(spec, rows)
     out = []
-    for g, end in enumerate(ends):
+    for g, (end, elapsed) in enumerate(ends):
         F, ok = feasible_F(spec, rows[:end])
         F = F[np.all(F < ref, axis=1)] if ref is not None and ok else F[:0]
         hv = float(HV(ref_point=ref)(F)) if len(F) else 0.0
         out.append({"generation": g, "evaluations": end, "feasible": len(ok),
-                    "hypervolume": hv})
+                    "hypervolume": hv, "elapsed_s": elapsed})
     return out
 
 
@@ -89,7 +90,7 @@ def _write_csv(path: Path, rows: list[dict], head: list[str]) -> None:
             w.writerow({k: ("" if v is None else v) for k, v in r.items()})
 
 
-def write_results(folder: Path, spec: OptimiseSpec, rows: list[dict], ends: list[int],
+def write_results(folder: Path, spec: OptimiseSpec, rows: list[dict], ends: list[tuple],
                   seconds: float, where: str | None) -> dict:
     """Write ``folder/optimise/`` whole and return the run's record."""
     front = pareto_rows(spec, rows)
@@ -103,7 +104,7 @@ def write_results(folder: Path, spec: OptimiseSpec, rows: list[dict], ends: list
         _write_csv(tmp / "points.csv", rows, head)
         _write_csv(tmp / "pareto.csv", front, head)
         _write_csv(tmp / "hypervolume.csv", hv, ["generation", "evaluations", "feasible",
-                                                 "hypervolume"])
+                                                 "hypervolume", "elapsed_s"])
         pictures = plot_all(tmp, spec, rows, front, hv)
         record = _record(spec, rows, front, hv, seconds, where, final)
         write_page(tmp, spec, front, hv, record, pictures)
@@ -121,6 +122,7 @@ def write_results(folder: Path, spec: OptimiseSpec, rows: list[dict], ends: list
 
 
 def _record(spec, rows, front, hv, seconds, where, final: Path) -> dict:
+    ref = reference_point(spec, rows)
     return {
         "case": str(spec.path), "seed": spec.seed, "population": spec.population,
         "generations": len(hv), "stages": list(spec.stages),
@@ -131,6 +133,8 @@ def _record(spec, rows, front, hv, seconds, where, final: Path) -> dict:
         "cached": sum(r["status"] == "cached" for r in rows),
         "failed": sum(r["status"] == "failed" for r in rows),
         "pareto_size": len(front), "hypervolume": hv[-1]["hypervolume"] if hv else 0.0,
+        "hypervolume_reference": None if ref is None else [
+            o.sign * float(r) for o, r in zip(spec.objectives, ref, strict=True)],
         "seconds": round(seconds, 2), "where": where or "nothing to compute",
         "folder": str(final), "points": str(final / "points.csv"),
         "pareto": str(final / "pareto.csv"), "report": str(final / "index.html"),

@@ -22,7 +22,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 CASE = REPO / "examples" / "optimise_table1_inner_ev2.toml"
-TABLE1 = REPO.parent / "shared" / "reference" / "gerotor_screw_table1.csv"
+TABLE1 = REPO / "tests" / "data" / "reference" / "gerotor_screw_table1.csv"
 WORKERS = 2
 #: Pi_max of the reference point: above any front's end worth having (seed 000 Fig. 15
 #: stays below ~1 for the inner rotor driven).

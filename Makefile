@@ -11,11 +11,12 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 CASE ?= examples/default.toml
 SWEEP ?= examples/lambda_wrap_sweep.toml
+OPTIMISE_CASE ?= examples/optimise_table1_inner_ev2.toml
 PYTEST_ARGS ?=
 
 -include mk/*.mk
 
-.PHONY: help venv demo test lint bench case sweep report clean export
+.PHONY: help venv demo test lint bench case sweep optimise report clean export
 
 help: ## list the targets
 	@grep -hE '^[a-zA-Z_-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  %-10s %s\n", $$1, $$2}'
@@ -36,6 +37,9 @@ case: $(STAMP) ## run what a case asks for, skipping what is cached: make case C
 
 sweep: $(STAMP) ## run a sweep on a local Dask cluster: make sweep SWEEP=examples/lambda_wrap_sweep.toml
 	$(VENV)/bin/rotorflow sweep $(SWEEP)
+
+optimise: $(STAMP) ## multi-objective search of a case's [optimise] section: make optimise CASE=examples/optimise_table1_inner_ev2.toml
+	$(VENV)/bin/rotorflow optimise $(if $(filter command line,$(origin CASE)),$(CASE),$(OPTIMISE_CASE))
 
 report: $(STAMP) ## HTML report of a case (build/<case>/report/index.html): make report CASE=...
 	$(VENV)/bin/rotorflow run $(CASE) --want report

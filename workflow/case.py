@@ -28,7 +28,7 @@ WRAP_KEY = "wrap_{}_deg"
 OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven", "discharge_port"}
 SECTIONS = {
     "machine", "sweep", "operating", "leakage", "ports", "numerics", "mechanical", "export",
-    "outputs", "cfd", "cfd_chamber",
+    "outputs", "cfd", "cfd_chamber", "optimise",
 }
 
 
@@ -76,7 +76,13 @@ def load_toml(path: Path) -> dict:
 
 def load_case(path: Path) -> Case:
     path = Path(path)
-    data = load_toml(path)
+    return case_from_raw(load_toml(path), path)
+
+
+def case_from_raw(data: dict, path: Path) -> Case:
+    """The case of a parsed case file (``path``: its name and where errors point), so
+    that an optimisation evaluates its points in process, without a file per point."""
+    path = Path(path)
     for name in data:
         if name not in SECTIONS:
             raise CaseError(f"unknown section [{name}] in {path}")
@@ -246,6 +252,10 @@ def validate_stage_sections(data: dict, path: Path, pair: RotorPair | None = Non
         if not isinstance(data["cfd_chamber"], dict):
             raise CaseError(f"[cfd_chamber] in {path} must be a table")
         ChamberSettings.from_section(data["cfd_chamber"], str(path))
+    if "optimise" in data:  # owned by `rotorflow optimise` (its section's own keys)
+        from rotorflow.workflow.optimise_spec import check_section
+
+        check_section(data["optimise"], path)
     if "outputs" in data:  # the stages a case asks for (rotorflow run)
         from rotorflow.workflow.stages import validate_outputs
 

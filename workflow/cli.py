@@ -161,6 +161,27 @@ def cmd_sweep(args) -> int:
     return 0
 
 
+def cmd_optimise(args) -> int:
+    from rotorflow.workflow.optimise import run_optimise
+
+    _log_setup(args.verbose)
+    cluster = {"address": args.scheduler, "jobqueue": args.jobqueue, "workers": args.workers,
+               "jobs": args.jobs}
+    record = run_optimise(args.case, args.build, cluster=cluster, serial=args.serial,
+                          progress=not args.no_progress)
+    if args.json:
+        print(json.dumps({k: v for k, v in record.items() if k != "pareto_set"}, indent=2))
+    else:
+        print(f"optimise {Path(args.case).stem}: {record['generations']} generations, "
+              f"{record['evaluations']} designs, {record['computed']} computed, "
+              f"{record['cached']} cached, {record['failed']} failed, "
+              f"{record['seconds']:.1f} s ({record['where']})")
+        print(f"Pareto set: {record['pareto_size']} designs, hypervolume "
+              f"{record['hypervolume']:.6g}: {record['pareto']}")
+        print(f"report: {record['report']}")
+    return 0
+
+
 def cmd_export(args) -> int:
     from rotorflow.geometry.export.driver import export
     from rotorflow.geometry.export.settings import Export
@@ -248,7 +269,27 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--json", action="store_true", help="print the sweep record as JSON")
     w.add_argument("-v", "--verbose", action="store_true", help="log progress")
     w.set_defaults(func=cmd_sweep)
+    o = sub.add_parser("optimise", help="multi-objective search of a case's [optimise] "
+                       "section (NSGA-II) on Dask; Pareto set, points, front, report")
+    o.add_argument("case", type=Path)
+    _cluster_args(o, "BUILD/<case>/optimise/ (the store of evaluations beside it)")
+    o.add_argument("--json", action="store_true", help="print the run's record as JSON")
+    o.set_defaults(func=cmd_optimise)
     return parser
+
+
+def _cluster_args(p: argparse.ArgumentParser, where: str) -> None:
+    p.add_argument("--build", type=Path, default=Path("build"),
+                   help=f"build folder (default: build); results go to {where}")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="address of a running Dask scheduler")
+    p.add_argument("--jobqueue", metavar="KIND",
+                   help="a dask-jobqueue cluster: slurm, pbs, sge, lsf, htcondor, moab, oar")
+    p.add_argument("--jobs", type=int, help="jobqueue jobs to start")
+    p.add_argument("--workers", type=int, help="worker processes of the local cluster")
+    p.add_argument("--serial", action="store_true",
+                   help="evaluate one design after another in this process (no Dask)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("-v", "--verbose", action="store_true", help="log progress")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -109,6 +109,18 @@ def write_json_atomic(path: Path, obj) -> None:
     os.replace(tmp, path)
 
 
+def swap_in(tmp: Path, final: Path) -> None:
+    """Put the finished folder ``tmp`` in place of ``final``: the old one is renamed
+    aside first and removed after, so ``final`` is always a whole folder or absent."""
+    old = None
+    if final.exists():
+        old = final.with_name(f"{OLD_PREFIX}{final.name}-{uuid.uuid4().hex[:8]}")
+        os.rename(final, old)
+    os.rename(tmp, final)
+    if old:
+        shutil.rmtree(old, ignore_errors=True)
+
+
 def read_stamp(folder: Path) -> dict | None:
     """The stamp of a complete artifact folder, or None (absent, unreadable, incomplete)."""
     try:
@@ -170,13 +182,7 @@ class CaseBuild:
     def commit(self, tmp: Path, stage: str) -> Path:
         """Move a sealed temporary folder into place, replacing the old artifact."""
         final = self.artifact(stage)
-        old = None
-        if final.exists():
-            old = self.folder / f"{OLD_PREFIX}{stage}-{uuid.uuid4().hex[:8]}"
-            os.rename(final, old)
-        os.rename(tmp, final)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+        swap_in(tmp, final)
         return final
 
     def clean_stale(self) -> list[Path]:

@@ -10,14 +10,13 @@ section) and the record ``optimise.json``.
 from __future__ import annotations
 
 import csv
-import os
 import shutil
 import uuid
 from pathlib import Path
 
 import numpy as np
 
-from .cache import write_json_atomic
+from .cache import swap_in, write_json_atomic
 from .optimise_plots import plot_all, write_page
 from .optimise_spec import OptimiseSpec
 
@@ -109,13 +108,7 @@ def write_results(folder: Path, spec: OptimiseSpec, rows: list[dict], ends: list
         record = _record(spec, rows, front, hv, seconds, where, final)
         write_page(tmp, spec, front, hv, record, pictures)
         write_json_atomic(tmp / "optimise.json", record)
-        old = None
-        if final.exists():
-            old = folder / f".old-optimise-{uuid.uuid4().hex[:8]}"
-            os.rename(final, old)
-        os.rename(tmp, final)
-        if old:
-            shutil.rmtree(old, ignore_errors=True)
+        swap_in(tmp, final)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return record

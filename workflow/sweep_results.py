@@ -9,6 +9,7 @@ import shutil
 import uuid
 from pathlib import Path
 
+from .cache import swap_in
 from .sweep_file import SweepSpec
 from .sweep_points import base_value
 
@@ -46,14 +47,7 @@ def write_report(folder: Path, spec: SweepSpec, rows: list[dict]) -> Path:
     tmp = folder / f".tmp-report-{uuid.uuid4().hex[:8]}"
     try:
         sweep_report(tmp, spec.name, spec.params, spec.axes, rows)
-        final = folder / "report"
-        old = None
-        if final.exists():
-            old = folder / f".old-report-{uuid.uuid4().hex[:8]}"
-            os.rename(final, old)
-        os.rename(tmp, final)
-        if old:
-            shutil.rmtree(old, ignore_errors=True)
+        swap_in(tmp, folder / "report")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return folder / "report" / "index.html"

@@ -148,10 +148,15 @@ def run_stress_point(pt: dict, numerics: Numerics | None = None) -> dict:
                mass_balance_error=f["mass_balance_error"],
                energy_balance_error=f["energy_balance_error"],
                method=res.solution.run.method)
+    return classify(out, res, bad)
+
+
+def classify(out: dict, res, bad: list[str]) -> dict:
+    """A stress point's outcome: invalid (its defects), not converged, or converged."""
     if bad:
         out.update(status="invalid", message="; ".join(bad))
     elif not res.converged:
-        out.update(status="not converged", message=f.get("message", ""))
+        out.update(status="not converged", message=res.figures.get("message", ""))
     else:
         out.update(status="converged", message="")
     return out

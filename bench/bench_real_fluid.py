@@ -53,7 +53,7 @@ from rotorflow.quasi1d.model import build
 from rotorflow.quasi1d.result import make_result
 from rotorflow.quasi1d.synthetic import scaled_table
 
-from .bench_quasi1d import _write_csv
+from .bench_quasi1d import _write_csv, classify
 
 # evaporating temperature range (C) and discharge-pressure cap (bar) of each fluid
 FLUIDS = {"R134a": (-20.0, 15.0, None), "R290": (-25.0, 10.0, None),
@@ -189,13 +189,7 @@ def run_point(pt: dict, fluid) -> dict:
                p_max_bar=float(np.max(res.chamber["p_Pa"])) / 1e5,
                T_min_K=float(np.min(res.chamber["T_K"])),
                method=res.solution.run.method)
-    if bad:
-        out.update(status="invalid", message="; ".join(bad))
-    elif not res.converged:
-        out.update(status="not converged", message=f.get("message", ""))
-    else:
-        out.update(status="converged", message="")
-    return out
+    return classify(out, res, bad)
 
 
 def product_check(pt: dict, row: dict) -> dict:

@@ -141,12 +141,17 @@ def cmd_run(args) -> int:
     return 0
 
 
+def _cluster(args) -> dict:
+    """The Dask cluster the command line asks for (see _cluster_args)."""
+    return {"address": args.scheduler, "jobqueue": args.jobqueue, "workers": args.workers,
+            "jobs": args.jobs}
+
+
 def cmd_sweep(args) -> int:
     from rotorflow.workflow.sweep import run_sweep
 
     _log_setup(args.verbose)
-    cluster = {"address": args.scheduler, "jobqueue": args.jobqueue, "workers": args.workers,
-               "jobs": args.jobs}
+    cluster = _cluster(args)
     record = run_sweep(args.sweep, args.build, cluster=cluster, serial=args.serial,
                        progress=not args.no_progress)
     if args.json:
@@ -165,8 +170,7 @@ def cmd_optimise(args) -> int:
     from rotorflow.workflow.optimise import run_optimise
 
     _log_setup(args.verbose)
-    cluster = {"address": args.scheduler, "jobqueue": args.jobqueue, "workers": args.workers,
-               "jobs": args.jobs}
+    cluster = _cluster(args)
     record = run_optimise(args.case, args.build, cluster=cluster, serial=args.serial,
                           progress=not args.no_progress)
     if args.json:
@@ -256,29 +260,22 @@ def build_parser() -> argparse.ArgumentParser:
     w = sub.add_parser("sweep", help="run the points of a sweep file on Dask; summary CSV "
                        "and report")
     w.add_argument("sweep", type=Path)
-    w.add_argument("--build", type=Path, default=Path("build"),
-                   help="build folder (default: build); results go to BUILD/<sweep>/")
-    w.add_argument("--scheduler", metavar="ADDRESS", help="address of a running Dask scheduler")
-    w.add_argument("--jobqueue", metavar="KIND",
-                   help="a dask-jobqueue cluster: slurm, pbs, sge, lsf, htcondor, moab, oar")
-    w.add_argument("--jobs", type=int, help="jobqueue jobs to start")
-    w.add_argument("--workers", type=int, help="worker processes of the local cluster")
-    w.add_argument("--serial", action="store_true",
-                   help="run the points one after another in this process (no Dask)")
-    w.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _cluster_args(w, "BUILD/<sweep>/", "run the points one after another in this process "
+                  "(no Dask)")
     w.add_argument("--json", action="store_true", help="print the sweep record as JSON")
-    w.add_argument("-v", "--verbose", action="store_true", help="log progress")
     w.set_defaults(func=cmd_sweep)
     o = sub.add_parser("optimise", help="multi-objective search of a case's [optimise] "
                        "section (NSGA-II) on Dask; Pareto set, points, front, report")
     o.add_argument("case", type=Path)
-    _cluster_args(o, "BUILD/<case>/optimise/ (the store of evaluations beside it)")
+    _cluster_args(o, "BUILD/<case>/optimise/ (the store of evaluations beside it)",
+                  "evaluate one design after another in this process (no Dask)")
     o.add_argument("--json", action="store_true", help="print the run's record as JSON")
     o.set_defaults(func=cmd_optimise)
     return parser
 
 
-def _cluster_args(p: argparse.ArgumentParser, where: str) -> None:
+def _cluster_args(p: argparse.ArgumentParser, where: str, serial: str) -> None:
+    """The options of a command that runs on Dask (sweep, optimise)."""
     p.add_argument("--build", type=Path, default=Path("build"),
                    help=f"build folder (default: build); results go to {where}")
     p.add_argument("--scheduler", metavar="ADDRESS", help="address of a running Dask scheduler")
@@ -286,8 +283,7 @@ def _cluster_args(p: argparse.ArgumentParser, where: str) -> None:
                    help="a dask-jobqueue cluster: slurm, pbs, sge, lsf, htcondor, moab, oar")
     p.add_argument("--jobs", type=int, help="jobqueue jobs to start")
     p.add_argument("--workers", type=int, help="worker processes of the local cluster")
-    p.add_argument("--serial", action="store_true",
-                   help="evaluate one design after another in this process (no Dask)")
+    p.add_argument("--serial", action="store_true", help=serial)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("-v", "--verbose", action="store_true", help="log progress")
 

@@ -17,6 +17,8 @@ from rotorflow.geometry.family import RotorPair, family_for, number
 from rotorflow.geometry.ports import DISCHARGE_PORTS
 from rotorflow.geometry.sweep import Sweep
 
+from .plausible import check_plausible
+
 #: [machine] keys of every family; each family adds its own (geometry.family.Family.keys).
 MACHINE_KEYS = {"type", "length_mm"}
 SWEEP_KEYS = {"kind", "wrap_outer_deg", "wrap_bar", "diameter_end_mm", "lead_ratio"}
@@ -28,7 +30,7 @@ WRAP_KEY = "wrap_{}_deg"
 OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven", "discharge_port"}
 SECTIONS = {
     "machine", "sweep", "operating", "leakage", "ports", "numerics", "mechanical", "export",
-    "outputs", "cfd", "cfd_chamber", "optimise",
+    "outputs", "cfd", "cfd_chamber", "optimise", "plausibility",
 }
 
 
@@ -86,6 +88,7 @@ def case_from_raw(data: dict, path: Path) -> Case:
     for name in data:
         if name not in SECTIONS:
             raise CaseError(f"unknown section [{name}] in {path}")
+    check_plausible(data, path)
     pair, length = _machine(data, path)
     kind, wrap, wrap_bar, scale_end, lead_ratio = _sweep_law(data, path, pair)
     volume_ratio, driven, discharge_port = _operating(data, path, pair)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from rotorflow.errors import CaseError
 
 from ..family import Family, number, register
-from .pair import PinGerotor, sigma_limit
+from .pair import ROUNDING, PinGerotor, sigma_limit
 
 KEYS = frozenset({
     "lobes_outer",
@@ -39,12 +39,12 @@ def from_section(m: dict, where: str) -> PinGerotor:
         sigma = number(m, "sigma", where)
     else:
         sigma_bar = number(m, "sigma_bar", where)
-        if not 0.0 < sigma_bar <= 1.0:
+        if not 0.0 < sigma_bar <= 1.0 + ROUNDING:
             raise CaseError(f"sigma_bar must lie in (0, 1] in {where}, got {sigma_bar}")
-        sigma = sigma_bar * lim
+        sigma = min(sigma_bar, 1.0) * lim
     if not sigma > 0.0:
         raise CaseError(f"sigma must be positive in {where}, got {sigma}")
-    if sigma > lim * (1.0 + 1e-9):
+    if sigma > lim * (1.0 + ROUNDING):
         raise CaseError(
             f"sigma = {sigma:.6g} is above the undercut limit sigma_lim = {lim:.6g} in {where}"
         )

@@ -36,6 +36,14 @@ from ..family import Rotor, RotorPair
 from ..planar import TWO_PI, cross, rotate
 from .limits import pressure_angle_at_pitch, sigma_limit
 
+#: A pin above its undercut limit by this share is the limit written with fewer digits
+#: (sigma_bar = 1.0000001, a sigma copied from a table), not an undercut: sigma_bar = 1
+#: is the paper's optimum and must survive a round trip through decimal input.
+ROUNDING = 1e-6
+#: An arc fillet may touch the conjugate one at the pin edges, where both start: the
+#: depth there is round-off, and anything deeper (relative to D) is interference.
+ARC_TOLERANCE = 1e-9
+
 #: Default radius of the casing bore (the outer rotor's outside) per outer diameter D / 2.
 BORE_FACTOR = 1.25
 
@@ -69,9 +77,7 @@ class PinGerotor(RotorPair):
         if not self.sigma > 0.0:
             raise CaseError(f"sigma must be positive, got {self.sigma}")
         lim = self.sigma_lim
-        # Relative slack: sigma_bar = 1 is the paper's optimum and must be accepted even
-        # after a round trip through decimal input.
-        if self.sigma > lim * (1.0 + 1e-9):
+        if self.sigma > lim * (1.0 + ROUNDING):
             raise CaseError(
                 f"sigma = {self.sigma:.6g} is above the undercut limit sigma_lim = {lim:.6g} "
                 f"for N1={self.lobes_outer}, lambda={self.lam:g} (seed 000 Eq. 4)"
@@ -244,11 +250,13 @@ class PinGerotor(RotorPair):
     @cached_property
     def arc_fillet(self) -> tuple[np.ndarray, float, float, float]:
         """Circle (centre, radius) and end angles about it of the arc fillet 0, ccw."""
+        return self._arc_circle(self.apex_diameter)
+
+    def _arc_circle(self, apex_d: float) -> tuple[np.ndarray, float, float, float]:
         j0 = self.pin_point(0, -self.pin_edge)
         j1 = self.pin_point(1, self.pin_edge)
         mid = math.pi / 2.0 + math.pi / self.lobes_outer
-        apex_r = 0.5 * (self.fillet_apex_diameter or self.diameter)
-        apex = apex_r * np.array([math.cos(mid), math.sin(mid)])
+        apex = 0.5 * apex_d * np.array([math.cos(mid), math.sin(mid)])
         # Circle through three points: the centre is on the mid-line (symmetry).
         u = np.array([math.cos(mid), math.sin(mid)])
         # |c - apex| = |c - j0| with c = t u: solve for t.
@@ -264,22 +272,42 @@ class PinGerotor(RotorPair):
             span -= TWO_PI
         return centre, radius, a0, a0 + span
 
-    def _check_arc_fillet(self):
-        apex_d = self.fillet_apex_diameter or self.diameter
-        if apex_d < self.diameter * (1.0 - 1e-12):
-            raise CaseError(
-                f"fillet apex diameter {apex_d:.6g} m is inside the conjugate fillet "
-                f"(smallest allowed: D = {self.diameter:.6g} m)"
-            )
-        centre, radius, _, _ = self.arc_fillet
+    def _infringement(self, apex_d: float) -> float:
+        """How far [m] the arc through an apex at ``apex_d / 2`` cuts into the conjugate
+        fillet (negative: it clears it)."""
+        centre, radius, _, _ = self._arc_circle(apex_d)
         conj = PinGerotor(self.lobes_outer, self.lam, self.sigma, self.diameter)
         g_lo, g_hi = conj.fillet_range
         _, pts = conj.fillet(np.linspace(g_lo, g_hi, 401))
         # The fluid side of the arc is inside its circle; a conjugate-fillet point
         # outside it would be cut by the arc: the rotors would interfere.
-        depth = np.linalg.norm(pts - centre, axis=-1) - radius
-        worst = float(depth.max())
-        if worst > 1e-9 * self.diameter:
+        return float((np.linalg.norm(pts - centre, axis=-1) - radius).max())
+
+    @cached_property
+    def apex_diameter(self) -> float:
+        """The arc fillet's apex diameter: the one given, or else the smallest at or
+        above D whose arc clears the conjugate fillet (at D itself a short pin's arc
+        cuts into it, so D alone is no default for every pair)."""
+        if self.fillet_apex_diameter is not None:
+            return self.fillet_apex_diameter
+        tol = ARC_TOLERANCE * self.diameter
+        lo = hi = self.diameter
+        while self._infringement(hi) > tol:
+            lo, hi = hi, 1.5 * hi  # a deeper apex bulges the arc away from the fillet
+        while hi - lo > 1e-7 * self.diameter:
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if self._infringement(mid) > tol else (lo, mid)
+        return hi
+
+    def _check_arc_fillet(self):
+        apex_d = self.apex_diameter
+        if apex_d < self.diameter * (1.0 - 1e-12):
+            raise CaseError(
+                f"fillet apex diameter {apex_d:.6g} m is inside the conjugate fillet "
+                f"(smallest allowed: D = {self.diameter:.6g} m)"
+            )
+        worst = self._infringement(apex_d)
+        if worst > ARC_TOLERANCE * self.diameter:
             raise CaseError(
                 f"the arc fillet infringes the conjugate fillet by {worst * 1e6:.3g} um: "
                 "raise fillet_apex_diameter_mm"

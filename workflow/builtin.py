@@ -38,16 +38,53 @@ def write_json(path, obj) -> None:
 
 def machine_of(ctx: StageContext):
     """The case's machine (profile, chamber curves), computed once per process."""
+    return _machine(ctx.case)
+
+
+def _machine(case):
     from rotorflow.geometry.summary import build_machine
 
     from .stages import GEOMETRY_READS, select
 
-    key = digest(select(ctx.raw, GEOMETRY_READS))
+    key = digest(select(case.raw, GEOMETRY_READS))
     if key not in _machines:
-        _machines[key] = build_machine(ctx.case)
+        _machines[key] = build_machine(case)
         while len(_machines) > MACHINE_MEMO_SIZE:
             _machines.popitem(last=False)
     return _machines[key]
+
+
+def _quasi1d_settings(raw: dict, where: str) -> tuple:
+    from rotorflow.quasi1d import Leakage, Mechanical, Numerics, Operating, Ports
+
+    return (Operating.from_section(raw["operating"], where),
+            Leakage.from_section(raw.get("leakage", {}), where),
+            Ports.from_section(raw.get("ports", {}), where),
+            Numerics.from_section(raw.get("numerics", {}), where),
+            Mechanical.from_section(raw.get("mechanical", {}), where))
+
+
+def check_quasi1d(case, case_path) -> None:
+    """The quasi-1D stage's refusals: its settings, and the port timing against the
+    chamber's life (the chamber table built in process from the memoised machine that
+    the geometry and table stages then reuse)."""
+    from rotorflow.geometry.summary import chamber_table
+    from rotorflow.quasi1d.chamber import prepare
+
+    operating, _, _, numerics, _ = _quasi1d_settings(case.raw, str(case_path))
+    operating.check_ideal_gas()
+    prepare(chamber_table(case, _machine(case)), operating.volume_ratio,
+            operating.suction_close_rad, operating.discharge_open_rad, operating.speed_rpm,
+            numerics.vanish_fraction, operating.discharge_early_opening_rad)
+
+
+def check_solids(case, case_path) -> None:
+    """The solids stage's refusals (its settings against the rotors: clearances, bores,
+    cutter set-ups), without building a solid."""
+    from rotorflow.geometry.export.driver import check
+    from rotorflow.geometry.export.settings import Export
+
+    check(case, Export.from_section(case.raw["export"], str(case_path)))
 
 
 #: Angle step of the contact table the geometry stage writes (one lobe period).
@@ -75,16 +112,10 @@ def run_table(ctx: StageContext) -> dict:
 
 def run_quasi1d(ctx: StageContext) -> dict:
     from rotorflow.geometry import table
-    from rotorflow.quasi1d import Leakage, Mechanical, Numerics, Operating, Ports, simulate
+    from rotorflow.quasi1d import simulate
 
-    raw, where = ctx.raw, str(ctx.case_path)
     tab = table.read(ctx.input("table") / "chamber_table.csv")
-    result = simulate(tab,
-                      Operating.from_section(raw["operating"], where),
-                      Leakage.from_section(raw.get("leakage", {}), where),
-                      Ports.from_section(raw.get("ports", {}), where),
-                      Numerics.from_section(raw.get("numerics", {}), where),
-                      Mechanical.from_section(raw.get("mechanical", {}), where))
+    result = simulate(tab, *_quasi1d_settings(ctx.raw, str(ctx.case_path)))
     summary = result.summary()
     write_json(ctx.out / "summary.json", summary)
     result.write_traces(ctx.out)

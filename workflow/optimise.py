@@ -26,6 +26,7 @@ import numpy as np
 
 from .cache import CaseBuild, digest
 from .optimise_eval import STORE, EvaluationStore, evaluate_stages, stage_keys, with_values
+from .optimise_polish import polish
 from .optimise_spec import OptimiseSpec, load_optimise
 
 log = logging.getLogger(__name__)
@@ -86,7 +87,8 @@ def _algorithm(spec: OptimiseSpec):
 
 def search(spec: OptimiseSpec, dispatch: Dispatch) -> tuple[list[dict], list[tuple]]:
     """Every evaluated design (one row each, in the order asked), and after each
-    generation the number of rows and the seconds since the search began."""
+    generation (and after the polish of the front's ends, if asked) the number of rows
+    and the seconds since the search began."""
     from pymoo.core.evaluator import Evaluator
     from pymoo.problems.static import StaticProblem
 
@@ -105,6 +107,10 @@ def search(spec: OptimiseSpec, dispatch: Dispatch) -> tuple[list[dict], list[tup
         Evaluator().eval(StaticProblem(problem, F=F, G=G), pop)
         algorithm.tell(infills=pop)
         rows += batch
+        ends.append((len(rows), round(time.perf_counter() - t0, 3)))
+    polished = polish(spec, dispatch, rows, len(ends))
+    if polished:  # one more "generation" in the hypervolume record: the polish
+        rows += polished
         ends.append((len(rows), round(time.perf_counter() - t0, 3)))
     return rows, ends
 

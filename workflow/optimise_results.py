@@ -118,7 +118,8 @@ def _record(spec, rows, front, hv, seconds, where, final: Path) -> dict:
     ref = reference_point(spec, rows)
     return {
         "case": str(spec.path), "seed": spec.seed, "population": spec.population,
-        "generations": len(hv), "stages": list(spec.stages),
+        "generations": min(len(hv), spec.generations), "stages": list(spec.stages),
+        "polish_evaluations": sum(r["generation"] >= spec.generations for r in rows),
         "variables": [v.name for v in spec.variables],
         "objectives": {o.name: o.sense for o in spec.objectives},
         "evaluations": len(rows),

@@ -40,7 +40,7 @@ from pathlib import Path
 from rotorflow.errors import CaseError
 
 OPTIMISE_KEYS = ("seed", "population", "generations", "hypervolume_reference", "variables",
-                 "objectives", "constraints", "cluster")
+                 "objectives", "constraints", "cluster", "polish")
 #: Stages an optimisation evaluates in process, and the figure names they give.
 EVALUABLE_STAGES = ("geometry", "quasi1d")
 SENSES = ("min", "max")
@@ -109,6 +109,9 @@ class OptimiseSpec:
     seed: int
     reference: tuple[float, ...] | None
     cluster: object = field(repr=False, default=None)  # sweep_file.ClusterSpec
+    #: Evaluations of each local search that polishes a front's end (0: none; see
+    #: :mod:`.optimise_polish`).
+    polish: int = 0
 
     @property
     def figures(self) -> list[str]:
@@ -161,8 +164,11 @@ def _parse(section, path):
                                 and all(map(_number, ref))):
         raise _err(path, f"'hypervolume_reference' must be a list of {len(objectives)} "
                          "numbers, one per objective")
+    polish = section.get("polish", 0)
+    if isinstance(polish, bool) or not isinstance(polish, int) or polish < 0:
+        raise _err(path, "'polish' must be a non-negative integer (evaluations per start)")
     return (variables, objectives, constraints, population, generations, seed,
-            None if ref is None else tuple(float(r) for r in ref))
+            None if ref is None else tuple(float(r) for r in ref), polish)
 
 
 def _variables(path, table) -> tuple[Variable, ...]:
@@ -241,14 +247,15 @@ def load_optimise(path: Path, cluster_overrides: dict | None = None) -> Optimise
     if "optimise" not in data:
         raise CaseError(f"{path} has no [optimise] section")
     (variables, objectives, constraints, population, generations, seed,
-     ref) = _parse(data["optimise"], path)
+     ref, polish) = _parse(data["optimise"], path)
     cluster = data["optimise"].get("cluster", {})
     base_raw = {k: v for k, v in data.items() if k != "optimise"}
     case_from_raw(base_raw, path)
     spec = OptimiseSpec(path=path, name=path.stem, base_raw=base_raw, variables=variables,
                         objectives=objectives, constraints=constraints,
                         population=population, generations=generations, seed=seed,
-                        reference=ref, cluster=_cluster(path, cluster, cluster_overrides or {}))
+                        reference=ref, cluster=_cluster(path, cluster, cluster_overrides or {}),
+                        polish=polish)
     _check_variables(spec)
     _check_figures(spec)
     return spec

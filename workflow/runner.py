@@ -44,6 +44,9 @@ def prepare(case_path: Path, extra: list[str] | None = None):
     case = load_case(case_path)
     want = st.wanted(case.raw, case_path, extra)
     order = st.plan(case.raw, want, case_path)
+    for name in order:  # an invalid case writes nothing: no stage runs before all pass
+        if st.REGISTRY[name].check:
+            resolve(st.REGISTRY[name].check)(case, case_path)
     return case, want, order
 
 

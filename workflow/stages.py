@@ -75,6 +75,9 @@ class Stage:
     code: tuple[str, ...] = ()
     #: Bump to rebuild old artifacts even where the code hash cannot see a change.
     version: int = 1
+    #: "module:function" of ``f(case, case_path)``: everything the stage would refuse in
+    #: its input, found before any stage of a run writes anything (CaseError).
+    check: str | None = None
 
     @property
     def code_modules(self) -> tuple[str, ...]:
@@ -249,6 +252,7 @@ register(Stage(
     figures="summary.json",
     missing=_needs_operating_point,
     default=lambda raw: _needs_operating_point(raw) is None,
+    check=f"{_IMPL}:check_quasi1d",
 ))
 register(Stage(
     name="render",
@@ -272,6 +276,7 @@ register(Stage(
     report=f"{_REPORT}:solids_section",
     missing=_has_export,
     default=lambda raw: "export" in raw,
+    check=f"{_IMPL}:check_solids",
 ))
 def _has_cfd(raw: dict) -> str | None:
     return None if "cfd" in raw else "it has no [cfd] section"

@@ -64,10 +64,9 @@ log = logging.getLogger(__name__)
 #: Share of the narrowest normal gap each fluid flank may deviate: two flanks each
 #: within 0.45 of the gap leave 10 % of it open.
 FLUID_GAP_SHARE = 0.45
-def export(case, settings: Export, out: Path) -> dict:
-    """Write the requested files into ``out`` (an existing, empty folder); the manifest."""
-    t_start = time.perf_counter()
-    out = Path(out)
+def check(case, settings: Export):
+    """The assembly of ``case``'s rotors, or a CaseError for any export it cannot make
+    (found before a file is written)."""
     if settings.wants("fluid") and not min(settings.clearance_m) > 0.0:
         raise CaseError("the fluid domain needs clearance_um > 0 everywhere: with no gap the "
                         "chambers touch along the sealing lines and it is not a solid")
@@ -76,9 +75,17 @@ def export(case, settings: Export, out: Path) -> dict:
             and not asm.tip_clearance > 0.0:
         raise CaseError("the fluid domain needs tip_clearance_um > 0: with no gap the rotor "
                         "tips touch their bores and it is not a solid")
-    if settings.wants("cutter"):  # fail before building anything else
+    if settings.wants("cutter"):
         for part in asm.holes:
             _setup(asm, part.name)
+    return asm
+
+
+def export(case, settings: Export, out: Path) -> dict:
+    """Write the requested files into ``out`` (an existing, empty folder); the manifest."""
+    t_start = time.perf_counter()
+    out = Path(out)
+    asm = check(case, settings)
     manifest = _manifest(case, asm, settings)
     files, timing = manifest["files"], manifest["timing_s"]
     timing["profiles_s"] = time.perf_counter() - t_start

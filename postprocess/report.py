@@ -12,7 +12,9 @@ section function has the signature::
 
     def my_section(artifact_dir: Path, report_dir: Path, case) -> Section | None
 
-and may write pictures into ``report_dir`` (named after the stage).
+and may write pictures into ``report_dir`` (named after the stage).  A section's
+``headline`` goes to the top of the page (:mod:`.report_headline`); the figure tables
+spell their keys out (:mod:`.report_labels`).
 
 A small script in the page checks, once it has loaded, that every ``<img>`` decoded
 (``naturalWidth > 0``); it writes the count and any broken sources into the ``body``'s
@@ -31,6 +33,10 @@ from pathlib import Path
 
 import numpy as np
 
+from . import report_labels as labels
+from .report_headline import headline_html, reference_rotor
+from .report_labels import labelled_table
+
 log = logging.getLogger(__name__)
 
 FIGSIZE = (6.4, 4.2)
@@ -48,6 +54,7 @@ figcaption { font-size: .85em; color: #555; }
 pre { background: #f7f7f7; padding: .8em; overflow-x: auto; font-size: .85em; }
 .warn { background: #fee; border: 1px solid #c00; padding: .5em; }
 .failed { color: #b00; } .muted { color: #777; font-size: .85em; }
+table.headline { font-size: 1.05em; } table.headline td.num { font-weight: 600; }
 """
 
 IMAGE_CHECK = """
@@ -71,6 +78,9 @@ window.addEventListener('load', function () {
 class Section:
     title: str
     html: str
+    #: What the section puts at the top of the report, above every section (the
+    #: quasi-1D stage's performance headline); empty for most.
+    headline: str = ""
 
 
 # ------------------------------------------------------------------ HTML helpers
@@ -153,7 +163,16 @@ def _copy(src: Path, report_dir: Path, name: str) -> str:
 # ------------------------------------------------------------------ stage sections
 def geometry_section(artifact: Path, report_dir: Path, case) -> Section:
     fig = json.loads((artifact / "geometry.json").read_text())
-    return Section("Geometry", key_value_table(fig))
+    # The same criterion as geometry.summary: a pair with port areas times its ports,
+    # any other's two angles are the chamber's contacts with the end planes.
+    ported = bool(getattr(getattr(case, "pair", None), "port_areas", False))
+    ref = reference_rotor(case)
+    note = "" if ported else (
+        "<p class='muted'>This family's end-plane angles below are when the chamber meets "
+        "the end planes, not when its ports open and close; the port timing the model "
+        "uses is in the quasi-1D section.</p>")
+    return Section("Geometry", note + labelled_table(
+        fig, lambda k: labels.geometry_label(k, ported, ref), fmt, esc))
 
 
 def render_section(artifact: Path, report_dir: Path, case) -> Section:
@@ -201,8 +220,11 @@ def quasi1d_section(artifact: Path, report_dir: Path, case) -> Section:
                           ("quasi1d_p_V.png", "Chamber pressure against volume (p-V)")):
         if (artifact / name).is_file():
             body.append(figure(_copy(artifact / name, report_dir, name), caption))
-    body.append(key_value_table(summary))
-    return Section("Quasi-1D performance", "".join(body))
+    ref = reference_rotor(case)
+    body.append(labelled_table(flatten(summary), lambda k: labels.quasi1d_label(k, ref),
+                               fmt, esc))
+    return Section("Quasi-1D performance", "".join(body),
+                   headline=headline_html(summary, case, esc))
 
 
 def solids_section(artifact: Path, report_dir: Path, case) -> Section:
@@ -228,14 +250,20 @@ def solids_section(artifact: Path, report_dir: Path, case) -> Section:
 # ------------------------------------------------------------------ case report
 def case_page(name: str, case_path, case_text: str, status: list[list],
               sections: list[tuple[str, Section]]) -> str:
-    """The report of a case: its stages (``status``: stage, what, key, built, seconds),
-    their sections in the order given (anchored by stage name), and the case file."""
+    """The report of a case: the sections' headlines (the quasi-1D performance), the
+    sections in the order given (anchored by stage name), its stages (``status``: stage,
+    what, key, built, seconds) and the case file."""
     body = [f"<h1>rotorflow report: {esc(name)}</h1>",
-            f"<p>Case file <code>{esc(case_path)}</code>.</p>",
-            "<h2>Stages</h2>",
-            table(["stage", "what", "key", "built", "seconds"], status)]
+            f"<p>Case file <code>{esc(case_path)}</code>.</p>"]
+    # The designer's figures first; how the report was built (stages) after the sections.
+    heads = [sec.headline for _, sec in sections if sec.headline]
+    body.append("<h2 id='headline-section'>Headline</h2>" + "".join(heads) if heads else
+                "<p class='muted'>No performance headline: the case ran no quasi-1D "
+                "stage.</p>")
     for stage, sec in sections:
         body.append(f"<h2 id='{esc(stage)}'>{esc(sec.title)}</h2>\n{sec.html}")
+    body.append("<h2>Stages</h2>"
+                + table(["stage", "what", "key", "built", "seconds"], status))
     body.append(f"<h2>Case file</h2><pre>{esc(case_text)}</pre>")
     return page(f"rotorflow: {name}", "\n".join(body))
 

@@ -9,12 +9,15 @@ must be caught, so the check can fail.
 
 from __future__ import annotations
 
+import html
 import json
 import re
+import resource
 import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from .conftest import CASES
@@ -39,16 +42,28 @@ def demo_report(tmp_path_factory):
     return build / "default"
 
 
-def open_in_chromium(index, tmp_path) -> dict:
-    """Body attributes after the page loaded in headless Chromium."""
+def chromium(tmp_path, *args) -> str:
+    """Headless Chromium's stdout for ``args`` (a fresh profile under ``tmp_path``)."""
     out = subprocess.run(
         [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
-         f"--user-data-dir={tmp_path / 'chromium-profile'}", "--virtual-time-budget=10000",
-         "--dump-dom", index.resolve().as_uri()],
+         f"--user-data-dir={tmp_path / 'chromium-profile'}", *args],
         capture_output=True, text=True, timeout=120)
-    assert out.returncode == 0, out.stderr[-2000:]
-    body = re.search(r"<body([^>]*)>", out.stdout)
-    assert body, out.stdout[:2000]
+    # Chromium reserves far more address space than it uses (about 100 GB here); under
+    # `ulimit -v` below that it dies at start-up (SIGTRAP) without saying why.
+    limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+    hint = "" if limit == resource.RLIM_INFINITY else (
+        f" (address space limited to {limit / 2**30:.0f} GiB: Chromium needs ~100+ GiB of "
+        "it, raise `ulimit -v`)")
+    assert out.returncode == 0, f"chromium exit {out.returncode}{hint}: {out.stderr[-2000:]}"
+    return out.stdout
+
+
+def open_in_chromium(index, tmp_path) -> dict:
+    """Body attributes after the page loaded in headless Chromium."""
+    dom = chromium(tmp_path, "--virtual-time-budget=10000", "--dump-dom",
+                   index.resolve().as_uri())
+    body = re.search(r"<body([^>]*)>", dom)
+    assert body, dom[:2000]
     return dict(re.findall(r'([\w-]+)="([^"]*)"', body.group(1)))
 
 
@@ -61,6 +76,91 @@ def test_demo_report_opens_with_every_image(demo_report, tmp_path):
     attrs = open_in_chromium(index, tmp_path)
     assert attrs.get("data-images") == str(len(sources)), attrs
     assert attrs.get("data-images-broken") == "", attrs
+
+
+#: The screenshot's window; the headline must fit in its top part.
+SHOT_W, SHOT_H = 1200, 900
+
+
+def headline_cells(dom: str) -> dict[str, tuple[str, str, str]]:
+    """quantity -> (value, unit, basis) of the headline table in a DOM dump."""
+    tab = re.search(r'<table id="headline".*?</table>', dom, re.S)
+    assert tab, "no headline table in the DOM"
+    rows = re.findall(r"<tr><th>([^<]*)</th><td[^>]*>([^<]*)</td><td>([^<]*)</td>"
+                      r"<td[^>]*>([^<]*)</td></tr>", tab.group(0))
+    return {html.unescape(q): tuple(html.unescape(x) for x in rest) for q, *rest in rows}
+
+
+@needs_chromium
+def test_screenshot_shows_the_headline_first(demo_report, tmp_path):
+    """The page as Chromium renders it leads with the headline, whose figures are the
+    summary's in a designer's units, and a screenshot of it is a real picture."""
+    index = (demo_report / "report" / "index.html").resolve()
+    dom = chromium(tmp_path, "--dump-dom", index.as_uri())
+    # Before every section (the geometry is the first) and before the stages table.
+    at = dom.find('id="headline"')
+    assert 0 < at < dom.find('id="geometry"') < dom.find(">Stages<")
+    cells = headline_cells(dom)
+    s = json.loads((demo_report / "quasi1d" / "summary.json").read_text())
+    # Expected values from the summary, units converted here (not by the report).
+    expected = {
+        "Volume flow at suction": (s["suction_volume_flow_L_min"] / 1000.0, "m³/min"),
+        "Mass flow": (s["mass_flow_kg_s"], "kg/s"),
+        "Indicated power": (s["indicated_power_W"] / 1000.0, "kW"),
+        "Shaft power": (s["shaft_power_W"] / 1000.0, "kW"),
+        "Specific power": ((s["shaft_power_W"] / 1000.0)
+                           / (s["suction_volume_flow_L_min"] / 1000.0), "kW/(m³/min)"),
+        "Volumetric efficiency": (100.0 * s["volumetric_efficiency"], "%"),
+        "Isentropic efficiency, indicated": (100.0 * s["adiabatic_efficiency"], "%"),
+        "Isentropic efficiency, shaft": (100.0 * s["adiabatic_efficiency_shaft"], "%"),
+        "Isothermal efficiency, indicated": (100.0 * s["isothermal_efficiency"], "%"),
+        "Discharge temperature": (s["discharge_temperature_K"], "K"),
+    }
+    assert set(expected) <= set(cells), cells
+    for quantity, (value, unit) in expected.items():
+        shown, shown_unit, _ = cells[quantity]
+        assert shown_unit == unit, quantity
+        # Four significant figures: within half a unit of the fourth figure, no more.
+        digits = re.sub(r"[^0-9]", "", shown).lstrip("0")
+        assert len(digits) == 4, (quantity, shown)
+        assert float(shown) == pytest.approx(value, rel=5e-4), quantity
+    celsius = s["discharge_temperature_K"] - 273.15
+    assert f"{celsius:.1f} °C" in cells["Discharge temperature"][2]
+
+    shot = tmp_path / "report.png"
+    chromium(tmp_path, "--hide-scrollbars", f"--window-size={SHOT_W},{SHOT_H}",
+             f"--screenshot={shot}", index.as_uri())
+    pytest.importorskip("matplotlib")
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(shot)  # floats in [0, 1]
+    assert img.shape[:2] == (SHOT_H, SHOT_W)
+    rgb = img[..., :3]
+    assert rgb.std() > 0.05 and rgb.min() < 0.2, "blank screenshot"
+    # The headline's first column (header cells, #f3f3f3) runs down most of the top of
+    # the first screen: a tall table leads the page (with the stages table first, the
+    # longest grey column there is about half as long).
+    grey = np.all(np.abs(rgb[: SHOT_H * 2 // 3] - 243 / 255) < 1.5 / 255, axis=-1)
+    assert grey.sum(axis=0).max() > 250, grey.sum(axis=0).max()
+
+
+def test_report_names_what_the_end_plane_angles_are(demo_report):
+    """On the internal gear the geometry's two angles are the chamber's contacts with the
+    end planes, not the port timing the model uses (the quasi-1D summary's), and the
+    report names them so; the port timing appears under its own name."""
+    page = html.unescape((demo_report / "report" / "index.html").read_text())
+    geo = json.loads((demo_report / "geometry" / "geometry.json").read_text())
+    s = json.loads((demo_report / "quasi1d" / "summary.json").read_text())
+    assert abs(geo["angle_discharge_open_deg"] - s["discharge_open_deg"]) > 90.0
+    row = re.search(r"<tr><th>([^<]*)</th><td class='num'>([^<]*)</td><td>([^<]*)</td>"
+                    r"<td class='muted'><code>angle_discharge_open_deg</code>", page)
+    assert row and "first contact with the high-pressure end plane" in row.group(1)
+    assert "not the discharge port opening" in row.group(1)
+    assert row.group(2) == f"{geo['angle_discharge_open_deg']:.6g}"
+    assert row.group(3).startswith("deg of outer-rotor turn")
+    assert (f"Discharge port opens at (model's port timing)</th><td class='num'>"
+            f"{s['discharge_open_deg']:.6g}") in page
+    assert "Normalised swept volume V_sw / (π D² L / 4)" in page
 
 
 @needs_chromium

@@ -27,7 +27,7 @@ log = logging.getLogger(__name__)
 #: rotor_angle_deg x moving_walls.  Tip gaps are made when radius_mm or wall_speed_m_s
 #: is given or rotor_angle_deg is not; sections when rotor_angle_deg is given.
 CFD_KEYS = ("gap_um", "pressure_ratio", "radius_mm", "wall_speed_m_s", "runs_dir",
-            "rotor_angle_deg", "rotor_gap_um", "rotor_pressure_ratio", "moving_walls")
+            "rotor_angle_deg", "rotor_gap_um", "rotor_pressure_ratio", "moving_walls", "matrix")
 TIP_KEYS = ("gap_um", "pressure_ratio", "radius_mm", "wall_speed_m_s")
 SECTION_KEYS = ("rotor_angle_deg", "rotor_gap_um", "rotor_pressure_ratio")
 
@@ -46,7 +46,8 @@ def matrix_from_section(
 ) -> list[MatrixPoint | SectionPoint]:
     """The matrix a [cfd] section asks for: every combination of its lists.
 
-    No list given: :func:`default_matrix`.  Unknown keys are a CaseError naming them.
+    ``matrix = "default"``: :func:`default_matrix`; no list and no ``matrix``: an error.
+    Unknown keys are a CaseError naming them.
     Section points (``rotor_angle_deg``) need ``machine``; their sections are cut here,
     so an angle where none exists is a CaseError naming it and the reason.
     """
@@ -62,7 +63,15 @@ def matrix_from_section(
     if "moving_walls" in section and "rotor_angle_deg" not in section:
         raise CaseError(f"key 'moving_walls' in [cfd] of {where} needs rotor_angle_deg "
                         "(tip gaps take wall_speed_m_s)")
+    if "matrix" in section and (section["matrix"] != "default" or lists):
+        raise CaseError(f"key 'matrix' in [cfd] of {where} takes \"default\" alone (the "
+                        "built-in study); else give the lists of the matrix")
     if not lists:
+        if section.get("matrix") != "default":
+            # The built-in study is dozens of OpenFOAM runs (hours here): asked, not implied.
+            raise CaseError(f"[cfd] of {where} asks for no runs: give gap_um and "
+                            "pressure_ratio (tip gaps) or rotor_angle_deg (sealing-line "
+                            "sections), or matrix = \"default\" for the built-in study")
         return default_matrix()
     gaps = lists.get("gap_um", [5, 20, 50, 200])
     ratios = lists.get("pressure_ratio", [1.1, 1.5, 2.5, 4.0])

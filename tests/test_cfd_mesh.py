@@ -207,7 +207,9 @@ def test_cfd_section_of_a_case_file():
     from rotorflow.cases.gap_study import default_matrix
     from rotorflow.cases.leakage_stage import matrix_from_section
 
-    assert matrix_from_section({}) == default_matrix()
+    assert matrix_from_section({"matrix": "default"}) == default_matrix()
+    with pytest.raises(CaseError, match="asks for no runs"):
+        matrix_from_section({})  # an empty [cfd] starts no hours-long study by accident
     points = matrix_from_section({"gap_um": [5, 50], "pressure_ratio": [1.5, 3.0]})
     assert [(p.gap_um, p.pressure_ratio) for p in points] == [(5, 1.5), (5, 3.0), (50, 1.5),
                                                               (50, 3.0)]

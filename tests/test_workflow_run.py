@@ -152,6 +152,21 @@ def test_asking_for_a_stage_without_its_input_exits_2(tmp_path):
     assert out.returncode == 2 and "not found" in out.stderr
 
 
+
+@pytest.mark.parametrize("edit, word", [
+    # refused by the quasi-1D stage (the timing against the chamber's life), which runs
+    # after the geometry, table, render and solids stages
+    (("volume_ratio = 2", "volume_ratio = 2\nsuction_close_deg = 0"), "chamber's life"),
+    # refused by the solids stage: a casing bore inside the rotor
+    (("tolerance_um = 20", "tolerance_um = 20\nbore_diameter_mm = 50"), "bore_diameter_mm"),
+])
+def test_a_late_stage_refusal_stops_the_run_before_any_stage_writes(tmp_path, edit, word):
+    out = rotorflow("run", case_copy(tmp_path, edit=edit), "--build", tmp_path / "build")
+    assert out.returncode == 2, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and word in lines[0], out.stderr
+    assert not (tmp_path / "build").exists()
+
 # ---------------------------------------------------------------- SIGKILL mid-stage
 SLOW_STAGE = '''
 import os, sys, time

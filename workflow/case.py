@@ -260,6 +260,8 @@ def validate_stage_sections(data: dict, path: Path, pair: RotorPair | None = Non
 
         check_section(data["optimise"], path)
     if "outputs" in data:  # the stages a case asks for (rotorflow run)
-        from rotorflow.workflow.stages import validate_outputs
+        from rotorflow.workflow.stages import plan, validate_outputs
 
-        validate_outputs(data["outputs"], path)
+        # Every stage asked for has its input: geometry, simulate and run accept the
+        # same files.
+        plan(data, validate_outputs(data["outputs"], path), path)

@@ -72,7 +72,7 @@ def polish(spec: OptimiseSpec, dispatch, rows: list[dict], generation: int) -> l
         for start in starts(spec, rows, k):
             x0 = np.array([start[v.name] for v in reals], float)
 
-            def f(x, start=start):
+            def f(x, start=start, k=k):
                 F, G = objective_arrays(spec, [evaluate(start, x)])
                 return float(F[0, k] + PENALTY * np.clip(G[0], 0.0, None).sum())
 

@@ -20,6 +20,7 @@ that a pump delivering nothing is still judged).
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -144,7 +145,12 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
     lam = 1.0
     rtol = num.rtol
     tightened = 0
+    deadline = time.perf_counter() + num.max_seconds
     for _ in range(num.max_cycles):
+        if cycles and time.perf_counter() > deadline:
+            message = (f"stopped at the time budget of {num.max_seconds:g} s ([numerics] "
+                       f"max_seconds) after {cycles} periods: ")
+            break
         Y0 = np.repeat(z[None], d + 1 if newton else 1, axis=0)
         if newton:
             Y0[np.arange(1, d + 1), idx] += dz
@@ -191,11 +197,12 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
             dp = dT = mc = ec = np.inf
         else:
             best = None
-    else:
+    if not converged:
         if best is not None and best[0] < float(np.max(np.abs(z_next - z)[idx] / scales[idx])):
             _, z, run, _, _, (dp, dT, mc, ec) = best
-        message = (f"cycle not converged after {num.max_cycles} periods: relative change of p "
-                   f"{dp:.2e}, T {dT:.2e}, mass balance {mc:.2e}, energy balance {ec:.2e}")
+        message = (message or f"cycle not converged after {num.max_cycles} periods: ") + (
+            f"relative change of p {dp:.2e}, T {dT:.2e}, mass balance {mc:.2e}, "
+            f"energy balance {ec:.2e}")
     mc, ec, cm, ce = balances(model, z, run.y[0])
     model.cache.clear()  # the result keeps the model; not its work arrays
     model.work.clear()

@@ -398,9 +398,13 @@ class Numerics:
     vanish_fraction: float = 1.0e-3
     max_steps: int = 200_000  # per lobe period; more means the problem is too stiff
     newton: bool = True  # Newton shooting on the period map (else plain cycle iteration)
+    # Wall-clock budget of one cycle solve [s]: a point that needs more is returned
+    # unconverged, with the budget named, rather than left to run on (a typical point
+    # takes 0.1-5 s; an absurd pressure ratio can take minutes to exhaust max_cycles).
+    max_seconds: float = 60.0
 
     KEYS = ("integrator", "rtol", "atol", "max_cycles", "cycle_rtol", "balance_tol",
-            "vanish_fraction", "max_steps", "newton")
+            "vanish_fraction", "max_steps", "newton", "max_seconds")
 
     @classmethod
     def from_section(cls, d: dict, where: str = "the case") -> Numerics:
@@ -416,6 +420,7 @@ class Numerics:
             vanish_fraction=_number(d, "vanish_fraction", s, where, 1e-3, positive=True),
             max_steps=_number(d, "max_steps", s, where, 200_000, positive=True, integer=True),
             newton=_bool(d, "newton", s, where, True),
+            max_seconds=_number(d, "max_seconds", s, where, 60.0, positive=True),
         )
         if n.vanish_fraction >= 0.1:
             raise CaseError(f"key 'vanish_fraction' in [{s}] of {where} must be below 0.1")

@@ -219,3 +219,40 @@ generations = 3
     assert all(float(a["geometry.V_sw_bar"]) < float(b["geometry.V_sw_bar"])
                for a, b in zip(by_pin, by_pin[1:], strict=False))
     assert record["pareto_set"][0]["machine.sigma_bar"] == float(best["machine.sigma_bar"])
+
+
+def test_polish_descends_to_the_bound_the_search_only_approaches(tmp_path):
+    """The same problem with the front's end polished: Nelder-Mead from the search's
+    best reaches the undercut limit itself (sigma_bar = 1, seed 000 Fig. 9) to 1e-3."""
+    text = BASE + """
+[optimise]
+seed = 3
+population = 6
+generations = 3
+polish = 30
+[optimise.variables]
+"machine.sigma_bar" = [0.3, 1.0]
+[optimise.objectives]
+"geometry.V_sw_bar" = "max"
+"""
+    record = run_optimise(write(tmp_path, "pin", text), tmp_path / "build", serial=True,
+                          progress=False)
+    points = read_csv(Path(record["folder"]) / "points.csv")
+    searched = [r for r in points if int(r["generation"]) < 3]
+    polished = [r for r in points if int(r["generation"]) == 3]
+    assert 0 < len(polished) <= 30 and record["polish_evaluations"] == len(polished)
+    assert max(float(r["machine.sigma_bar"]) for r in searched) < 0.99
+    assert float(record["pareto_set"][0]["machine.sigma_bar"]) > 0.999
+
+
+def test_separate_searches_give_every_lobe_count_its_own_population(tmp_path):
+    """With "separate", each N1 is searched by its own population (seed 000 Fig. 15),
+    even where another N1's designs would crowd it out of a single search."""
+    text = TINY.format(seed=1, angle=ANGLE_MAX).replace(
+        "generations = 2", 'generations = 2\nseparate = ["machine.lobes_outer"]')
+    record = run_optimise(write(tmp_path, "sep", text), tmp_path / "build", serial=True,
+                          progress=False)
+    points = read_csv(Path(record["folder"]) / "points.csv")
+    per = {n: sum(r["machine.lobes_outer"] == n for r in points) for n in ("3", "4", "5")}
+    assert per == {"3": 8, "4": 8, "5": 8}  # 4 designs x 2 generations each
+    assert {r["generation"] for r in points} == {"0", "1"}

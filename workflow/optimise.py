@@ -56,14 +56,14 @@ def run_optimise(path: Path, root: Path = Path("build"), *, cluster: dict | None
                              time.perf_counter() - t0, dispatch.where)
 
 
-def _problem(spec: OptimiseSpec):
+def _problem(spec: OptimiseSpec, fixed: dict):
     from pymoo.core.problem import Problem
     from pymoo.core.variable import Choice, Integer, Real
 
     kinds = {"int": lambda v: Integer(bounds=(v.low, v.high)),
              "real": lambda v: Real(bounds=(v.low, v.high)),
              "choice": lambda v: Choice(options=list(v.choices))}
-    variables = {v.name: kinds[v.kind](v) for v in spec.variables}
+    variables = {v.name: kinds[v.kind](v) for v in spec.variables if v.name not in fixed}
     n_constr = sum((c.low is not None) + (c.high is not None) for c in spec.constraints)
     return Problem(vars=variables, n_obj=len(spec.objectives), n_ieq_constr=n_constr + 1)
 
@@ -88,24 +88,37 @@ def _algorithm(spec: OptimiseSpec):
 def search(spec: OptimiseSpec, dispatch: Dispatch) -> tuple[list[dict], list[tuple]]:
     """Every evaluated design (one row each, in the order asked), and after each
     generation (and after the polish of the front's ends, if asked) the number of rows
-    and the seconds since the search began."""
+    and the seconds since the search began.
+
+    With ``separate`` variables, one NSGA-II per value (combination) of them: each
+    generation asks every one of them for its designs and evaluates them together
+    (one batch for the cluster), so that a value whose front lies behind another's
+    (seed 000 Fig. 15: N1 = 6 against N1 = 4) is still searched to its own front."""
     from pymoo.core.evaluator import Evaluator
     from pymoo.problems.static import StaticProblem
 
-    problem = _problem(spec)
-    algorithm = _algorithm(spec)
-    algorithm.setup(problem, termination=("n_gen", spec.generations), seed=spec.seed,
-                    verbose=False)
+    searches = []
+    for fixed in spec.niches():
+        problem = _problem(spec, fixed)
+        algorithm = _algorithm(spec)
+        algorithm.setup(problem, termination=("n_gen", spec.generations), seed=spec.seed,
+                        verbose=False)
+        searches.append((fixed, problem, algorithm))
     rows: list[dict] = []
     ends: list[tuple[int, float]] = []
     t0 = time.perf_counter()
-    while algorithm.has_next():
-        pop = algorithm.ask()
-        designs = [design_values(spec, x) for x in pop.get("X")]
+    while any(a.has_next() for _, _, a in searches):
+        asked = [(f, p, a, a.ask()) for f, p, a in searches if a.has_next()]
+        designs = [design_values(spec, {**x, **f}) for f, _, _, pop in asked
+                   for x in pop.get("X")]
         batch = dispatch.run(designs, len(ends))
         F, G = objective_arrays(spec, batch)
-        Evaluator().eval(StaticProblem(problem, F=F, G=G), pop)
-        algorithm.tell(infills=pop)
+        start = 0
+        for _, problem, algorithm, pop in asked:
+            end = start + len(pop)
+            Evaluator().eval(StaticProblem(problem, F=F[start:end], G=G[start:end]), pop)
+            algorithm.tell(infills=pop)
+            start = end
         rows += batch
         ends.append((len(rows), round(time.perf_counter() - t0, 3)))
     polished = polish(spec, dispatch, rows, len(ends))
@@ -161,7 +174,8 @@ class Dispatch:
         self.computed = self.cached = 0
         from tqdm import tqdm
 
-        self.bar = tqdm(total=spec.population * spec.generations, unit="design",
+        self.bar = tqdm(total=spec.population * spec.generations * len(spec.niches()),
+                        unit="design",
                         desc=f"optimise {spec.name}", disable=not progress,
                         dynamic_ncols=True)
 

@@ -40,7 +40,7 @@ from pathlib import Path
 from rotorflow.errors import CaseError
 
 OPTIMISE_KEYS = ("seed", "population", "generations", "hypervolume_reference", "variables",
-                 "objectives", "constraints", "cluster", "polish")
+                 "objectives", "constraints", "cluster", "polish", "separate")
 #: Stages an optimisation evaluates in process, and the figure names they give.
 EVALUABLE_STAGES = ("geometry", "quasi1d")
 SENSES = ("min", "max")
@@ -112,6 +112,19 @@ class OptimiseSpec:
     #: Evaluations of each local search that polishes a front's end (0: none; see
     #: :mod:`.optimise_polish`).
     polish: int = 0
+    #: Integer or choice variables searched one value (combination) at a time: one
+    #: population per value, evaluated together each generation, fronts merged.
+    separate: tuple[str, ...] = ()
+
+    def niches(self) -> list[dict]:
+        """The fixed values of each separate search ([{}]: one search of everything)."""
+        import itertools
+
+        fixed = [v for v in self.variables if v.name in self.separate]
+        values = [v.choices if v.kind == "choice" else range(v.low, v.high + 1)
+                  for v in fixed]
+        return [dict(zip((v.name for v in fixed), combo, strict=True))
+                for combo in itertools.product(*values)]
 
     @property
     def figures(self) -> list[str]:
@@ -167,8 +180,14 @@ def _parse(section, path):
     polish = section.get("polish", 0)
     if isinstance(polish, bool) or not isinstance(polish, int) or polish < 0:
         raise _err(path, "'polish' must be a non-negative integer (evaluations per start)")
+    separate = section.get("separate", [])
+    kinds = {v.name: v.kind for v in variables}
+    if not isinstance(separate, list) or any(kinds.get(n) not in ("int", "choice")
+                                             for n in separate):
+        raise _err(path, "'separate' must list integer or choice variables (one search per "
+                         "value)")
     return (variables, objectives, constraints, population, generations, seed,
-            None if ref is None else tuple(float(r) for r in ref), polish)
+            None if ref is None else tuple(float(r) for r in ref), polish, tuple(separate))
 
 
 def _variables(path, table) -> tuple[Variable, ...]:
@@ -247,7 +266,7 @@ def load_optimise(path: Path, cluster_overrides: dict | None = None) -> Optimise
     if "optimise" not in data:
         raise CaseError(f"{path} has no [optimise] section")
     (variables, objectives, constraints, population, generations, seed,
-     ref, polish) = _parse(data["optimise"], path)
+     ref, polish, separate) = _parse(data["optimise"], path)
     cluster = data["optimise"].get("cluster", {})
     base_raw = {k: v for k, v in data.items() if k != "optimise"}
     case_from_raw(base_raw, path)
@@ -255,7 +274,7 @@ def load_optimise(path: Path, cluster_overrides: dict | None = None) -> Optimise
                         objectives=objectives, constraints=constraints,
                         population=population, generations=generations, seed=seed,
                         reference=ref, cluster=_cluster(path, cluster, cluster_overrides or {}),
-                        polish=polish)
+                        polish=polish, separate=separate)
     _check_variables(spec)
     _check_figures(spec)
     return spec

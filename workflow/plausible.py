@@ -94,6 +94,7 @@ BY_KEY: dict[str, Range] = {
     "numerics.max_cycles": Range(1, 1000, "cycles", "", "a budget of hours"),
     "numerics.max_steps": Range(100, 1e8, "steps", "no cycle resolves in so few steps",
                                 "a budget of hours"),
+    "numerics.max_seconds": Range(0.1, 1e5, "s", "", "a budget of more than a day"),
     "mechanical.bearing_mu_radial": Range(0.0, 0.5, "", "", "beyond dry sliding friction"),
     "mechanical.bearing_mu_axial": Range(0.0, 0.5, "", "", "beyond dry sliding friction"),
     "mechanical.seal_torque_Nm": Range(0.0, 1e4, "Nm", "", ""),

@@ -149,7 +149,13 @@ def _positive_int(path, section, key, default):
 
 
 def _number(v) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+    """A finite number a float can hold (a TOML integer such as 10**400 cannot)."""
+    if not isinstance(v, int | float) or isinstance(v, bool):
+        return False
+    try:
+        return math.isfinite(float(v))
+    except OverflowError:
+        return False
 
 
 def check_section(section, path) -> None:

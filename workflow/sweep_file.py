@@ -287,7 +287,7 @@ def _samples(path, name: str, r, rng, n: int) -> list:
         return [choices[i] for i in rng.integers(0, len(choices), n)]
     ok = (isinstance(r, list) and len(r) == 2
           and all(isinstance(x, int | float) and not isinstance(x, bool) for x in r)
-          and all(math.isfinite(x) for x in r) and r[0] < r[1])
+          and all(abs(x) < 1e300 and math.isfinite(x) for x in r) and r[0] < r[1])
     if not ok:
         raise _err(path, f"'{name}' in [random] must be [min, max] with min < max")
     if all(isinstance(x, int) for x in r):

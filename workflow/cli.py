@@ -294,9 +294,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.func(args)
     except CaseError as exc:
-        print(f"rotorflow: error: {exc}", file=sys.stderr)
+        # Bad input is one line, even where a library's message (CoolProp's) spans lines.
+        print(f"rotorflow: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return 2
-    except RotorflowError as exc:
+    except RotorflowError as exc:  # a failed external run: its log tail, as it came
         print(f"rotorflow: error: {exc}", file=sys.stderr)
         return 2
 

@@ -347,9 +347,15 @@ def test_bad_input_on_the_command_line_exits_2_and_writes_nothing(tmp_path):
 
 
 @pytest.mark.gmsh
-def test_step_solids(pair_case, tmp_path):
+def test_step_solids_and_occ_volume(pair_case, tmp_path):
+    """Both rotors and the fluid core as STEP solids; OpenCASCADE's own volume of each
+    (a fresh import's mass properties, what a CAD user sees) is the analytic one."""
+    from rotorflow.geometry.export.assembly import assemble
     from rotorflow.geometry.export.step import check_step
+    from rotorflow.geometry.export.step_fluid import write_fluid_step
 
+    settings = Export(formats=("step", "fluid"), tolerance_m=TOL, clearance_m=(CLEAR,),
+                      clearance_on="female", tip_clearance_m=TIP)
     man = export(pair_case, Export(formats=("step",), tolerance_m=TOL,
                                    clearance_m=(CLEAR,), clearance_on="female"), tmp_path)
     a_m, a_f = _areas(pair_case.pair)
@@ -360,6 +366,16 @@ def test_step_solids(pair_case, tmp_path):
         chk = check_step(tmp_path / f"{name}.step")  # re-imported once more here
         assert chk.volumes == 1 and chk.closed
         assert chk.volume_m3 == pytest.approx(area * LENGTH, rel=1e-4)
+        assert chk.occ_volume_m3 == pytest.approx(area * LENGTH, rel=1e-4)
+        assert e["occ_volume_m3"] == pytest.approx(chk.occ_volume_m3, rel=1e-12)
+    r_m, r_f = pair_case.pair.male_radius, pair_case.pair.female_radius
+    core = (_union(r_m + TIP, r_f - CLEAR + TIP, C) - a_m - a_f) * LENGTH
+    path = tmp_path / "fluid_core.step"
+    write_fluid_step(path, assemble(pair_case, settings), TOL)
+    chk = check_step(path)
+    assert chk.volumes == 1 and chk.closed
+    assert chk.occ_volume_m3 == pytest.approx(core, rel=1e-4)
+    assert chk.volume_m3 == pytest.approx(core, rel=1e-4)
 
 
 @pytest.mark.parametrize("section, words", [

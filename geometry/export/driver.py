@@ -23,8 +23,11 @@ of the checks go into ``export.json`` beside the files:
   below half the narrowest gap.  Its volume without the ports is checked against the
   casing less the rotors and against the sum of the chamber table's volumes at that
   angle plus what the clearances open.
-* STEP (``<rotor>.step``): one solid per rotor, re-imported and checked (volume, and
-  the faces' deviation within the tolerance).
+* STEP (``<rotor>.step``, and with the fluid domain ``fluid_core.step``, the fluid
+  without the port pockets, :mod:`.step_fluid`): one solid each, re-imported and
+  checked: its volume by the divergence theorem on its faces and by OpenCASCADE's own
+  mass properties (what a CAD user sees in FreeCAD or gmsh) against the analytic one,
+  and the rotors' faces' deviation within the tolerance.
 * Profiles (CSV, DXF), point clouds (CSV, PLY), the form cutter of every rotor with its
   material inside (``<rotor>_cutter.csv`` and a JSON side-car) with its round trip,
   see :mod:`.csvfile`, :mod:`.dxf`, :mod:`.ply` and :mod:`.cutter`.
@@ -243,31 +246,46 @@ def _write_stl(path: Path, mesh: TriMesh, scale: float, analytic: float,
 
 def _step(out: Path, asm: Assembly, analytic: dict) -> dict:
     from .step import check_step, write_rotor_step
+    from .step_fluid import write_fluid_step
 
     files = {}
     tol = asm.settings.tolerance_m
     for p in asm.parts:
         path, key = out / f"{p.name}.step", f"{p.name}_m3"
         write_rotor_step(path, p.surface, tol, p.outside_radius)
-        chk = check_step(path, p.surface, tol)
-        if chk.volumes != 1 or not chk.closed:
-            raise RuntimeError(f"{path.name} re-imports as {chk.volumes} solids "
-                               f"(closed shell: {chk.closed})")
-        check_volume(path.name, chk.volume_m3, analytic[key])
-        if chk.deviation_m > tol:
-            raise RuntimeError(f"{path.name}: its faces deviate {chk.deviation_m * 1e6:.3g} um "
-                               f"from the analytic flank (tolerance {tol * 1e6:.3g} um)")
-        files[path.name] = {
-            "solids": chk.volumes,
-            "faces": chk.faces,
-            "closed": chk.closed,
-            "volume_m3": chk.volume_m3,
-            "occ_volume_m3": chk.occ_volume_m3,
-            "analytic_volume_m3": analytic[key],
-            "volume_rel_error": rel_error(chk.volume_m3, analytic[key]),
-            "max_deviation_m": chk.deviation_m,
-        }
+        files[path.name] = _step_entry(path, check_step(path, p.surface, tol), analytic[key])
+        if files[path.name]["max_deviation_m"] > tol:
+            raise RuntimeError(f"{path.name}: its faces deviate "
+                               f"{files[path.name]['max_deviation_m'] * 1e6:.3g} um from the "
+                               f"analytic flank (tolerance {tol * 1e6:.3g} um)")
+    if asm.settings.wants("fluid"):  # the core, without the port pockets of fluid.stl
+        path = out / "fluid_core.step"
+        write_fluid_step(path, asm, tol)
+        files[path.name] = _step_entry(path, check_step(path), analytic["fluid_core_m3"])
+        del files[path.name]["max_deviation_m"]  # the rotors' files measure these faces
     return files
+
+
+def _step_entry(path: Path, chk, analytic: float) -> dict:
+    """export.json's entry of a re-imported STEP solid, or an error: one closed solid
+    whose volume, by the divergence theorem on its faces and by OpenCASCADE's own mass
+    properties (what a CAD user sees), is the analytic one."""
+    if chk.volumes != 1 or not chk.closed:
+        raise RuntimeError(f"{path.name} re-imports as {chk.volumes} solids "
+                           f"(closed shell: {chk.closed})")
+    check_volume(path.name, chk.volume_m3, analytic)
+    check_volume(f"{path.name} (OpenCASCADE mass properties)", chk.occ_volume_m3, analytic)
+    return {
+        "solids": chk.volumes,
+        "faces": chk.faces,
+        "closed": chk.closed,
+        "volume_m3": chk.volume_m3,
+        "occ_volume_m3": chk.occ_volume_m3,
+        "analytic_volume_m3": analytic,
+        "volume_rel_error": rel_error(chk.volume_m3, analytic),
+        "occ_volume_rel_error": rel_error(chk.occ_volume_m3, analytic),
+        "max_deviation_m": chk.deviation_m,
+    }
 
 
 def _setup(asm: Assembly, rotor: str):

@@ -5,7 +5,8 @@ Keys (lengths in the unit their name carries; the dataclass holds SI):
 ``formats`` (required)
     any of ``"stl"`` (one solid per rotor, ``<rotor>.stl``: outer.stl and inner.stl for an
     internal gear, male.stl and female.stl for a twin screw), ``"fluid"`` (fluid.stl),
-    ``"step"`` (``<rotor>.step``), ``"dxf"`` (``<rotor>_profile.dxf``), ``"csv"`` (the
+    ``"step"`` (``<rotor>.step``; with ``"fluid"`` also fluid_core.step, the fluid
+    domain without the port pockets), ``"dxf"`` (``<rotor>_profile.dxf``), ``"csv"`` (the
     profiles and the point clouds as CSV), ``"ply"`` (the point clouds as PLY),
     ``"cutter"`` (``<rotor>_cutter.csv``: the form-cutter profile of every externally
     toothed rotor, i.e. every rotor with its material inside its profile: the internal

@@ -11,10 +11,15 @@ their boundary curves exactly; with planar end faces (and for the outer rotor th
 ruled bore cylinder, a cone when scaled) they are sewn into one shell and one solid.
 Model units are millimetres (STEP's default unit).
 
+Each face spans at most FACE_SPANS nodes along the profile and along z, with z as its
+first parameter: OpenCASCADE's mass properties integrate a face with one Gauss rule
+over the whole face (see FACE_SPANS), so a face of many spans reads a wrong volume.
+
 Checks, on the file as re-imported in a fresh gmsh session: exactly one volume, a
 closed shell (every edge bounds two faces, or one face twice along a seam), the volume
-against the analytic one (divergence theorem on the imported faces), and the largest
-distance of points of the B-spline faces from the analytic flank.
+against the analytic one (divergence theorem on the imported faces, and OCC's own
+mass property), and the largest distance of points of the B-spline faces from the
+analytic flank.
 """
 
 import logging
@@ -53,13 +58,22 @@ SPLINE_POINTS_TOL = 50.0
 #: and the uniform panels used on faces that are not flank patches (the bore).
 GAUSS_POINTS = 5
 GAUSS_PANELS = (64, 8)
+#: Hermite spans of one flank face, along the profile and along z.  OpenCASCADE's
+#: mass properties (BRepGProp, non-adaptive, as gmsh and FreeCAD call it) integrate a
+#: face with one Gauss rule over its whole parameter range, not span by span:
+#: min(2 (degree + 1) spans in V, 61) points in both directions, V being the profile
+#: here (a z=const edge's line pcurve asks for fewer).  Eight bicubic spans in V reach
+#: the 61-point cap, about 8 points a span in either direction; a whole lobe in one
+#: face left it 61 points for ~50 spans (1.2e-4 on co2_transcritical's inner rotor),
+#: and a straight rotor built with the profile as U got 8 (1.9 %).
+FACE_SPANS = 8
 
 
 @dataclass(frozen=True)
 class StepCheck:
     volumes: int
     volume_m3: float  # divergence theorem on the imported faces
-    occ_volume_m3: float  # OCC's mass property, for information
+    occ_volume_m3: float  # OCC's own mass property (what a CAD user sees)
     faces: int
     closed: bool
     deviation_m: float
@@ -131,6 +145,28 @@ def _piece_nodes(surface: SweptSurface, tol: float):
     return out
 
 
+def _chunks(nodes):
+    """Consecutive runs of at most FACE_SPANS spans (about equal), sharing their ends."""
+    cuts = np.round(np.linspace(0, len(nodes) - 1, (len(nodes) - 2) // FACE_SPANS + 2))
+    cuts = np.unique(cuts.astype(int))
+    return [nodes[a:b + 1] for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
+
+
+def _face_nodes(surface: SweptSurface, tol: float):
+    """(z nodes [m], profile nodes) of each flank face: every piece and the length cut
+    into runs of FACE_SPANS Hermite spans; a piece with fewer has its longest spans
+    bisected up to that many (more nodes only refine the interpolant)."""
+    out = []
+    z = _chunks(_section_levels(surface, 0.0, surface.length))
+    for uj in _piece_nodes(surface, tol):
+        while len(uj) - 1 < FACE_SPANS:
+            h = np.diff(uj)
+            k = int(np.argmax(h))
+            uj = np.insert(uj, k + 1, uj[k] + 0.5 * h[k])
+        out += [(zk, uk) for zk in z for uk in _chunks(uj)]
+    return out
+
+
 def hermite_net(surface: SweptSurface, u: np.ndarray, z: np.ndarray):
     """Control net (3m+1, 3n+1, 3) [mm] of the bicubic Hermite patches over the nodes.
 
@@ -178,26 +214,28 @@ def _knots(nodes):
 
 
 def _patch(occ, net, u, z) -> int:
-    nu = net.shape[0]
-    tags = [occ.addPoint(*p) for p in net.transpose(1, 0, 2).reshape(-1, 3)]
+    """The B-spline face over the net, z [mm] its first (U) parameter, the profile
+    parameter its second (V)."""
+    tags = [occ.addPoint(*p) for p in net.reshape(-1, 3)]  # U (z) runs fastest
     ku, mu = _knots(u)
     kz, mz = _knots(z * MM)
-    return occ.addBSplineSurface(tags, nu, degreeU=3, degreeV=3, knotsU=ku, knotsV=kz,
-                                 multiplicitiesU=mu, multiplicitiesV=mz)
+    return occ.addBSplineSurface(tags, net.shape[1], degreeU=3, degreeV=3, knotsU=kz,
+                                 knotsV=ku, multiplicitiesU=mz, multiplicitiesV=mu)
 
 
 def _flank_faces(gmsh, surface: SweptSurface, tol: float):
     """The flank patches and, per end (z = 0, z = L), their boundary curves in order."""
     occ = gmsh.model.occ
-    z = _section_levels(surface, 0.0, surface.length)
-    faces = [_patch(occ, hermite_net(surface, uj, z), uj, z) for uj in _piece_nodes(surface, tol)]
+    faces = [_patch(occ, hermite_net(surface, u, z), u, z) for z, u in _face_nodes(surface, tol)]
     occ.synchronize()
     ends = ([], [])
     for f in faces:
         for _, c in gmsh.model.getBoundary([(2, f)], oriented=False):
             box = gmsh.model.getBoundingBox(1, abs(c))
-            if abs(box[5] - box[2]) < 1e-9 * MM:  # a curve in a z plane
-                ends[0 if box[2] < 0.5 * surface.length * MM else 1].append(abs(c))
+            if abs(box[5] - box[2]) < 1e-9 * MM:  # a curve in a z plane: which end?
+                for k, z in enumerate((0.0, surface.length * MM)):
+                    if abs(box[2] - z) < 1e-6 * MM and abs(box[5] - z) < 1e-6 * MM:
+                        ends[k].append(abs(c))
     return faces, ends
 
 
@@ -270,20 +308,18 @@ def _gauss(edges):
     return t, (0.5 * h[:, None] * w[None, :]).ravel()
 
 
-def _span_grid(surface: SweptSurface, tol: float) -> dict:
-    """Knot vectors of the flank patches as built: piece j -> (u nodes, z nodes [mm])."""
-    z = _section_levels(surface, 0.0, surface.length) * MM
-    return {j: (u, z) for j, u in enumerate(_piece_nodes(surface, tol))}
+def _span_grid(surface: SweptSurface, tol: float) -> list:
+    """Knot vectors of the flank faces as built, in the faces' parameter order:
+    (z nodes [mm], profile nodes) per face."""
+    return [(z * MM, u) for z, u in _face_nodes(surface, tol)]
 
 
 def _patch_piece(lo, hi, grid) -> int | None:
-    """The flank piece j whose patch has the parameter bounds (lo, hi), if any."""
-    if grid is not None:
-        j = int(round(lo[0]))
-        if j in grid and abs(lo[0] - j) < 1e-9 and abs(hi[0] - j - 1) < 1e-9:
-            z = grid[j][1]
-            if abs(lo[1] - z[0]) < 1e-6 and abs(hi[1] - z[-1]) < 1e-6:
-                return j
+    """The index of the flank face with the parameter bounds (lo, hi), if any."""
+    for j, (z, u) in enumerate(grid or ()):
+        if abs(lo[1] - u[0]) < 1e-9 and abs(hi[1] - u[-1]) < 1e-9 \
+                and abs(lo[0] - z[0]) < 1e-6 and abs(hi[0] - z[-1]) < 1e-6:
+            return j
     return None
 
 
@@ -301,8 +337,7 @@ def _flux_volume(gmsh, vol: int, grid=None) -> float:
     flux through the planar end faces), by Gauss-Legendre on the curved faces'
     parameter rectangles, span by span on the flank patches (exact there: the
     integrand is a polynomial of degree 8 in each parameter).  OCC's own mass
-    properties are only about 1e-4 accurate on these faces at their default
-    precision."""
+    properties use one rule per face (FACE_SPANS keeps them within ~1e-6 of this)."""
     total = 0.0
     for _, f in gmsh.model.getBoundary([(3, vol)], oriented=True):
         tag, sign = abs(f), (1.0 if f > 0 else -1.0)
@@ -346,7 +381,7 @@ def _face_deviation(gmsh, surface: SweptSurface, faces, grid) -> float:
         if not len(pts):
             continue
         if _patch_piece(lo, hi, grid) is not None:
-            u0, z0 = A.ravel()[inside], B.ravel()[inside] / MM
+            u0, z0 = B.ravel()[inside], A.ravel()[inside] / MM
         else:
             u0, z0 = _nearest_start(surface, pts)
         d = foot_points(surface, pts, u0, z0, iterations=12)

@@ -133,10 +133,7 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
     dz = FD_STEP * scales[idx]
     z = model.initial_state()
     replay = None
-    method = num.integrator
-    if method == "auto" and model.ports.model == "nozzle":
-        # a nozzle port on a small chamber is stiff from the first step: go implicit at once
-        method = "ros23"
+    method = _first_method(model, num)
     cycles = n_rhs = 0
     message = ""
     converged = False
@@ -165,10 +162,7 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
         y_end = run.y[0]
         _check_states(model, y_end)
         z_next = model.shift(y_end)
-        p0, T0 = _pT(model, z)
-        p1, T1 = _pT(model, z_next)
-        dp = float(np.nanmax(np.abs(p1 / p0 - 1.0))) if p0.size else 0.0
-        dT = float(np.nanmax(np.abs(T1 / T0 - 1.0))) if T0.size else 0.0
+        dp, dT = _changes(model, z, z_next)
         mc, ec, _, _ = balances(model, z, y_end)
         if max(dp, dT) < num.cycle_rtol and max(mc, ec) < num.balance_tol:
             converged = True
@@ -208,6 +202,22 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
     model.work.clear()
     return CycleSolution(model, z, run, cycles, converged, message, dp, dT, mc, ec, cm, ce,
                          n_rhs)
+
+
+def _first_method(model: ChamberModel, num: Numerics) -> str:
+    if num.integrator == "auto" and model.ports.model == "nozzle":
+        # a nozzle port on a small chamber is stiff from the first step: go implicit at once
+        return "ros23"
+    return num.integrator
+
+
+def _changes(model: ChamberModel, z: np.ndarray, z_next: np.ndarray) -> tuple[float, float]:
+    """Largest relative change of p and of T over a period, from state z to z_next."""
+    p0, T0 = _pT(model, z)
+    p1, T1 = _pT(model, z_next)
+    dp = float(np.nanmax(np.abs(p1 / p0 - 1.0))) if p0.size else 0.0
+    dT = float(np.nanmax(np.abs(T1 / T0 - 1.0))) if T0.size else 0.0
+    return dp, dT
 
 
 def _plausible(model, z) -> bool:

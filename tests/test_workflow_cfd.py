@@ -24,7 +24,7 @@ def test_cfd_case_loads_and_its_stage_is_registered():
 
 @pytest.mark.parametrize("old, new, word", [
     ("gap_um = [5, 10, 50, 200]", "gap_um = [5, 10]\nmesh = 3", "mesh"),
-    ("gap_um = [5, 10, 50, 200]", "gap_um = [-10]", "gaps"),
+    ("gap_um = [5, 10, 50, 200]", "gap_um = [-10]", "must be positive"),
     ("pressure_ratio = [1.1, 2.0, 4.0]", "pressure_ratio = 2.0", "list"),
     ("rotor_angle_deg = [240, 300]", "rotor_angle_deg = [240, 330]", "330"),
     ("speed_rpm = 6000", "", "speed_rpm"),

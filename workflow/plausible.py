@@ -54,7 +54,10 @@ GAP_UM = Range(0.1, 5000.0, "um", "was it given in metres or mm?", "was it given
 #: Rotor angles [deg]: wraps and timings of up to ten turns (multi-turn pump rotors
 #: have three or four).
 ANGLE_DEG = Range(-3600.0, 3600.0, "deg", "", "was it given in some other unit?")
-WRAP_DEG = Range(0.0, 3600.0, "deg", "", "more than ten turns of wrap")
+#: Keys whose lower side the settings check themselves, with the meaning in the message
+#: ("lambda must be greater than 1", "volume_ratio must be at least 1"): no lower range.
+OWN_LOW = -1e9
+WRAP_DEG = Range(OWN_LOW, 3600.0, "deg", "", "more than ten turns of wrap")
 #: Shaft speeds [rpm]: a cycle longer than 6 s is heat exchange, not compression; above
 #: 100,000 rpm no positive-displacement rotor holds together.
 SPEED_RPM = Range(10.0, 1e5, "rpm", "a turn takes over 6 s", "beyond any rotor's burst speed")
@@ -64,16 +67,16 @@ COEFFICIENT = Range(1e-3, 1.0, "", "a path that passes nothing is not a leakage 
 
 #: Ranges of keys by section and key (checked first), then by key in any section.
 BY_KEY: dict[str, Range] = {
-    "machine.lobes_outer": Range(2, 12, "lobes", "", "no gerotor has so many lobes"),
-    "machine.lobes_male": Range(1, 10, "lobes", "", "no screw rotor has so many lobes"),
-    "machine.lobes_female": Range(1, 12, "lobes", "", "no screw rotor has so many lobes"),
-    "machine.lambda": Range(1.0, 10.0, "", "", "the pin circle would dwarf the rotor"),
-    "machine.sigma": Range(0.0, 10.0, "", "", "the pin would dwarf the rotor"),
+    "machine.lobes_outer": Range(OWN_LOW, 12, "lobes", "", "no gerotor has so many lobes"),
+    "machine.lobes_male": Range(OWN_LOW, 10, "lobes", "", "no screw rotor has so many lobes"),
+    "machine.lobes_female": Range(OWN_LOW, 12, "lobes", "", "no screw rotor has so many lobes"),
+    "machine.lambda": Range(OWN_LOW, 10.0, "", "", "the pin circle would dwarf the rotor"),
+    "machine.sigma": Range(OWN_LOW, 10.0, "", "", "the pin would dwarf the rotor"),
     "machine.tip_radius_mm": LENGTH_MM,
     "machine.fillet_apex_diameter_mm": SIZE_MM,
-    "sweep.wrap_bar": Range(0.0, 10.0, "", "", "more than ten chamber lives of wrap"),
+    "sweep.wrap_bar": Range(OWN_LOW, 10.0, "", "", "more than ten chamber lives of wrap"),
     "sweep.lead_ratio": Range(1e-2, 1e2, "", "the lead would vanish", "the lead would be flat"),
-    "operating.volume_ratio": Range(1.0, 20.0, "", "",
+    "operating.volume_ratio": Range(OWN_LOW, 20.0, "", "",
                                     "beyond any positive-displacement machine's built-in ratio"),
     "operating.speed_rpm": SPEED_RPM,
     "operating.heat_transfer_W_m2K": Range(0.0, 1e5, "W/m2K", "",
@@ -185,6 +188,8 @@ def _check_range(label: str, full: str, x: float, rng: Range) -> None:
     unit = f" {rng.unit}" if rng.unit else ""
     if rng.low <= x <= rng.high:
         return
+    if x <= 0.0 < rng.low:  # a sign or a zero, not a unit: nothing to accept
+        raise CaseError(f"{label} must be positive")
     side, bound, hint = (("below", rng.low, rng.below) if x < rng.low
                          else ("above", rng.high, rng.above))
     why = f": {hint}" if hint else ""

@@ -192,10 +192,8 @@ def test_front_respects_its_constraint_and_hypervolume_never_falls(tiny):
     assert all(b >= a for a, b in zip(hv, hv[1:], strict=False))  # the archive only grows
 
 
-def test_largest_swept_volume_is_the_largest_pin(tmp_path):
-    """Seed 000 (Fig. 9): the swept volume grows with the pin up to its
-    undercut limit, sigma_bar = 1; the search must head there from a random start."""
-    text = BASE + """
+#: One variable, the pin size, whose best (largest swept volume) is its upper bound.
+PIN = BASE + """
 [optimise]
 seed = 3
 population = 6
@@ -205,7 +203,12 @@ generations = 3
 [optimise.objectives]
 "geometry.V_sw_bar" = "max"
 """
-    record = run_optimise(write(tmp_path, "pin", text), tmp_path / "build", serial=True,
+
+
+def test_largest_swept_volume_is_the_largest_pin(tmp_path):
+    """Seed 000 (Fig. 9): the swept volume grows with the pin up to its
+    undercut limit, sigma_bar = 1; the search must head there from a random start."""
+    record = run_optimise(write(tmp_path, "pin", PIN), tmp_path / "build", serial=True,
                           progress=False)
     points = read_csv(Path(record["folder"]) / "points.csv")
     best = max(points, key=lambda r: float(r["geometry.V_sw_bar"]))
@@ -224,17 +227,7 @@ generations = 3
 def test_polish_descends_to_the_bound_the_search_only_approaches(tmp_path):
     """The same problem with the front's end polished: Nelder-Mead from the search's
     best reaches the undercut limit itself (sigma_bar = 1, seed 000 Fig. 9) to 1e-3."""
-    text = BASE + """
-[optimise]
-seed = 3
-population = 6
-generations = 3
-polish = 30
-[optimise.variables]
-"machine.sigma_bar" = [0.3, 1.0]
-[optimise.objectives]
-"geometry.V_sw_bar" = "max"
-"""
+    text = PIN.replace("generations = 3", "generations = 3\npolish = 30")
     record = run_optimise(write(tmp_path, "pin", text), tmp_path / "build", serial=True,
                           progress=False)
     points = read_csv(Path(record["folder"]) / "points.csv")

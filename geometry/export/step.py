@@ -262,14 +262,19 @@ def write_rotor_step(path: Path, surface: SweptSurface, tol: float,
             for circle, ring in ((c0, bottom), (c1, top)):
                 caps.append(occ.addPlaneSurface([occ.addCurveLoop([circle]),
                                                  occ.addCurveLoop(ring)]))
-        shell = occ.addSurfaceLoop(faces + caps, sewing=True)
-        occ.addVolume([shell])
-        occ.synchronize()
-        vols = gmsh.model.getEntities(3)
-        if len(vols) != 1:
-            raise ExternalRunError(f"OCC made {len(vols)} solids for {Path(path).name}, not one")
-        with _quiet_stdout():
-            gmsh.write(str(path))
+        write_solid(gmsh, faces + caps, path)
+
+
+def write_solid(gmsh, faces: list, path: Path) -> None:
+    """Sew ``faces`` into one solid and write it; an error if OCC makes any other count."""
+    occ = gmsh.model.occ
+    occ.addVolume([occ.addSurfaceLoop(faces, sewing=True)])
+    occ.synchronize()
+    vols = gmsh.model.getEntities(3)
+    if len(vols) != 1:
+        raise ExternalRunError(f"OCC made {len(vols)} solids for {Path(path).name}, not one")
+    with _quiet_stdout():
+        gmsh.write(str(path))
 
 
 def check_step(path: Path, surface: SweptSurface | None = None, tol: float | None = None,

@@ -14,10 +14,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rotorflow.errors import ExternalRunError
-
 from .assembly import Assembly
-from .step import MM, _flank_faces, _quiet_stdout
+from .step import MM, _flank_faces, write_solid
 
 #: An end curve lies in z = 0 or z = L to this distance [mm].
 PLANE_TOL_MM = 1e-6
@@ -75,10 +73,4 @@ def write_fluid_step(path: Path, asm: Assembly, tol: float, log_dir: Path | None
             loops = [occ.addCurveLoop(wall_ends[k])]
             loops += [occ.addCurveLoop(e[k]) for e in hole_ends]
             caps.append(occ.addPlaneSurface(loops))
-        occ.addVolume([occ.addSurfaceLoop(faces + caps, sewing=True)])
-        occ.synchronize()
-        vols = gmsh.model.getEntities(3)
-        if len(vols) != 1:
-            raise ExternalRunError(f"OCC made {len(vols)} solids for {Path(path).name}, not one")
-        with _quiet_stdout():
-            gmsh.write(str(path))
+        write_solid(gmsh, faces + caps, path)

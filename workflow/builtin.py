@@ -15,9 +15,9 @@ from .cache import StageContext, digest
 
 log = logging.getLogger(__name__)
 
-#: Machines kept in memory per process: the geometry and table stages of one case (and
-#: of consecutive sweep points on one worker) share one chamber computation.
-MACHINE_MEMO_SIZE = 4
+#: Machines and chamber tables kept in memory per process: the geometry and table stages
+#: of one case (and of consecutive sweep points on one worker) share one computation.
+MACHINE_MEMO_SIZE = 8
 _machines: OrderedDict = OrderedDict()
 
 
@@ -41,17 +41,29 @@ def machine_of(ctx: StageContext):
     return _machine(ctx.case)
 
 
-def _machine(case):
-    from rotorflow.geometry.summary import build_machine
-
+def _memo(case, kind: str, make):
     from .stages import GEOMETRY_READS, select
 
-    key = digest(select(case.raw, GEOMETRY_READS))
+    key = (kind, digest(select(case.raw, GEOMETRY_READS)))
     if key not in _machines:
-        _machines[key] = build_machine(case)
+        _machines[key] = make()
         while len(_machines) > MACHINE_MEMO_SIZE:
             _machines.popitem(last=False)
     return _machines[key]
+
+
+def _machine(case):
+    from rotorflow.geometry.summary import build_machine
+
+    return _memo(case, "machine", lambda: build_machine(case))
+
+
+def _table(case):
+    """The chamber table, once per process: the run's input check and the table stage
+    share it."""
+    from rotorflow.geometry.summary import chamber_table
+
+    return _memo(case, "table", lambda: chamber_table(case, _machine(case)))
 
 
 def _quasi1d_settings(raw: dict, where: str) -> tuple:
@@ -68,12 +80,11 @@ def check_quasi1d(case, case_path) -> None:
     """The quasi-1D stage's refusals: its settings, and the port timing against the
     chamber's life (the chamber table built in process from the memoised machine that
     the geometry and table stages then reuse)."""
-    from rotorflow.geometry.summary import chamber_table
     from rotorflow.quasi1d.chamber import prepare
 
     operating, _, _, numerics, _ = _quasi1d_settings(case.raw, str(case_path))
     operating.check_ideal_gas()
-    prepare(chamber_table(case, _machine(case)), operating.volume_ratio,
+    prepare(_table(case), operating.volume_ratio,
             operating.suction_close_rad, operating.discharge_open_rad, operating.speed_rpm,
             numerics.vanish_fraction, operating.discharge_early_opening_rad)
 
@@ -103,9 +114,8 @@ def run_geometry(ctx: StageContext) -> dict:
 
 def run_table(ctx: StageContext) -> dict:
     from rotorflow.geometry import table
-    from rotorflow.geometry.summary import chamber_table
 
-    tab = chamber_table(ctx.case, machine_of(ctx))
+    tab = _table(ctx.case)
     table.write(tab, ctx.out / "chamber_table.csv")
     return {"rows": int(len(tab.angle_rad))}
 

@@ -107,7 +107,7 @@ DEFAULT_MACHINE = (CASES / "default.toml").read_text().split("[operating]")[0]
 @pytest.mark.parametrize("machine, section, words", [
     (HELICAL, 'formats = ["stl"]\ntolerance_um = 0\n', "tolerance_um"),
     (HELICAL, 'formats = ["stl"]\ntolerance_um = -5\n', "tolerance_um"),
-    (HELICAL, 'formats = ["stl"]\nclearance_um = 20000\n', "above 5000 um"),
+    (HELICAL, 'formats = ["stl"]\nclearance_um = 20000\n', "above 2000 um"),
     (DEFAULT_MACHINE, 'formats = ["stl"]\nclearance_um = 5\nclearance_on = "inner"\n', "folds"),
     (HELICAL, 'formats = ["stl"]\nclearance_um = [5, -1]\n', "clearance_um"),
     (HELICAL, 'formats = ["fluid"]\n', "clearance"),

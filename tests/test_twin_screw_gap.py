@@ -270,7 +270,7 @@ def test_example_case_cuts_its_sections_at_the_male_speed():
 
 
 @pytest.mark.parametrize("edits, word", [
-    ({"rotor_gap_um = [20]": "rotor_gap_um = [3000]"}, "gap 3000 um"),
+    ({"rotor_gap_um = [20]": "rotor_gap_um = [1500]"}, "gap 1500 um"),
     ({"rotor_angle_deg = [60, 70]": "rotor_angle_deg = [60, 45]"}, "band of contact"),
     ({'profile = "circular"': 'profile = "pin-cycloid"',
       "centre_distance_mm = 78": "centre_distance_mm = 80",

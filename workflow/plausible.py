@@ -49,8 +49,10 @@ TEMPERATURE_K = Range(50.0, 1500.0, "K", "was it given in Celsius?",
 SIZE_MM = Range(1.0, 10000.0, "mm", "was it given in metres?", "was it given in um?")
 #: Other lengths [mm] (seal lands, fillet and tip radii, mesh spacings).
 LENGTH_MM = Range(1e-3, 10000.0, "mm", "was it given in metres?", "was it given in um?")
-#: Clearances and tolerances [um]: from the best grinding (0.1 um) to 5 mm.
-GAP_UM = Range(0.1, 5000.0, "um", "was it given in metres or mm?", "was it given in nm?")
+#: Clearances and tolerances [um]: from the best grinding (0.1 um) to 2 mm, four times
+#: the largest clearances of dry vacuum screw pumps (0.2-0.5 mm); beyond it a machine
+#: is an orifice between its plena (a 5 mm gap turned the CRC.60's delivery negative).
+GAP_UM = Range(0.1, 2000.0, "um", "was it given in metres or mm?", "was it given in nm?")
 #: Rotor angles [deg]: wraps and timings of up to ten turns (multi-turn pump rotors
 #: have three or four).
 ANGLE_DEG = Range(-3600.0, 3600.0, "deg", "", "was it given in some other unit?")

@@ -178,7 +178,7 @@ def families() -> dict[str, Family]:
 
 def family_for(type_: object, where: str) -> Family:
     _load_builtin()
-    if type_ not in _REGISTRY:
+    if not isinstance(type_, str) or type_ not in _REGISTRY:
         raise CaseError(f"unknown machine type {type_!r} in {where} "
                         f"(known: {', '.join(sorted(_REGISTRY))})")
     return _REGISTRY[type_]

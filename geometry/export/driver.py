@@ -49,7 +49,7 @@ from rotorflow.errors import CaseError
 
 from ..curves import sample_polygon
 from . import csvfile, dxf, ply, stl
-from .assembly import Assembly, Part, assemble, check_volume, rel_error
+from .assembly import VOLUME_RTOL, Assembly, Part, assemble, check_volume, rel_error
 from .cloud import cloud
 from .fluid import write_fluid
 from .settings import Export
@@ -67,6 +67,10 @@ log = logging.getLogger(__name__)
 #: Share of the narrowest normal gap each fluid flank may deviate: two flanks each
 #: within 0.45 of the gap leave 10 % of it open.
 FLUID_GAP_SHARE = 0.45
+#: Halvings of the flank tolerance an STL may take to hold its volume (VOLUME_RTOL).
+VOLUME_REFINES = 3
+
+
 def check(case, settings: Export):
     """The assembly of ``case``'s rotors, or a CaseError for any export it cannot make
     (found before a file is written)."""
@@ -183,9 +187,19 @@ def _meshes(case, asm: Assembly, out: Path, manifest: dict) -> None:
     if settings.wants("stl"):
         t0 = time.perf_counter()
         for p in asm.parts:
-            mesh = rotor_mesh(grids[p.name], p.outside_radius, tol_mesh, p.name)
-            files[f"{p.name}.stl"] = _write_stl(out / f"{p.name}.stl", mesh, scale,
-                                                asm.analytic[f"{p.name}_m3"], devs[p.name])
+            analytic = asm.analytic[f"{p.name}_m3"]
+            tol = tol_mesh
+            mesh = rotor_mesh(grids[p.name], p.outside_radius, tol, p.name)
+            # A deviation within tolerance can still miss the volume (a straight flank's
+            # chords all sag one way): refine until the solid's volume holds too.
+            for _ in range(VOLUME_REFINES):
+                if rel_error(_volume(mesh), analytic) <= VOLUME_RTOL:
+                    break
+                tol *= 0.5
+                grids[p.name], devs[p.name] = flank_to_tolerance(p.surface, tol)
+                mesh = rotor_mesh(grids[p.name], p.outside_radius, tol, p.name)
+            files[f"{p.name}.stl"] = _write_stl(out / f"{p.name}.stl", mesh, scale, analytic,
+                                                devs[p.name])
         timing["stl_s"] = time.perf_counter() - t0
     if fluid:
         t0 = time.perf_counter()
@@ -222,6 +236,12 @@ def _machining(asm: Assembly, out: Path, manifest: dict) -> None:
                           f"rotorflow {name} rotor flank, {unit}")
                 files[f"{name}_cloud.ply"] = {"points": len(pts)}
         manifest["timing_s"]["clouds_s"] = time.perf_counter() - t0
+
+
+def _volume(mesh: TriMesh) -> float:
+    """Enclosed volume by the divergence theorem (closed, outward-oriented faces)."""
+    v = mesh.vertices[mesh.faces]
+    return float(np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2])).sum() / 6.0)
 
 
 def _write_stl(path: Path, mesh: TriMesh, scale: float, analytic: float,

@@ -18,8 +18,9 @@ from .integrate import IntegrationError
 from .mechanical import Mechanical
 from .result import SimulationResult, plot_cycle
 from .settings import Leakage, Numerics, Operating, Ports
-from .simulate import simulate
+from .simulate import case_settings, simulate
 from .transient import TransientResult, simulate_transient
 
 __all__ = ["IntegrationError", "Leakage", "Mechanical", "Numerics", "Operating", "Ports",
-           "SimulationResult", "TransientResult", "plot_cycle", "simulate", "simulate_transient"]
+           "SimulationResult", "TransientResult", "case_settings", "plot_cycle", "simulate",
+           "simulate_transient"]

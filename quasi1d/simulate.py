@@ -16,6 +16,25 @@ from .settings import Leakage, Numerics, Operating, Ports
 from .shaft import shaft_figures
 
 
+def case_settings(raw: dict, where: str) -> tuple:
+    """(operating, leakage, ports, numerics, mechanical) of a parsed case file: the
+    arguments of :func:`simulate` after the table (absent sections: their defaults)."""
+    return (Operating.from_section(raw["operating"], where),
+            Leakage.from_section(raw.get("leakage", {}), where),
+            Ports.from_section(raw.get("ports", {}), where),
+            Numerics.from_section(raw.get("numerics", {}), where),
+            Mechanical.from_section(raw.get("mechanical", {}), where))
+
+
+def chamber_of(table, operating: Operating, numerics: Numerics):
+    """The chamber of ``table`` timed for ``operating`` (:func:`.chamber.prepare`): where
+    the port timing is refused against the chamber's life."""
+    operating.check_ideal_gas()
+    return prepare(table, operating.volume_ratio, operating.suction_close_rad,
+                   operating.discharge_open_rad, operating.speed_rpm, numerics.vanish_fraction,
+                   operating.discharge_early_opening_rad)
+
+
 def build_model(table, operating: Operating, leakage: Leakage | None = None,
                 ports: Ports | None = None, numerics: Numerics | None = None) -> ChamberModel:
     """The chamber equations of ``table`` at ``operating`` (what :func:`simulate` and
@@ -26,10 +45,7 @@ def build_model(table, operating: Operating, leakage: Leakage | None = None,
     leakage = leakage or Leakage(model="none")
     ports = ports or Ports()
     numerics = numerics or Numerics()
-    operating.check_ideal_gas()
-    geo = prepare(table, operating.volume_ratio, operating.suction_close_rad,
-                  operating.discharge_open_rad, operating.speed_rpm, numerics.vanish_fraction,
-                  operating.discharge_early_opening_rad)
+    geo = chamber_of(table, operating, numerics)
     fluid = make_fluid(operating, geo.v_max / geo.v_discharge)
     return build(geo, fluid, operating, leakage, ports)
 

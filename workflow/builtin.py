@@ -17,8 +17,8 @@ log = logging.getLogger(__name__)
 
 #: Machines and chamber tables kept in memory per process: the geometry and table stages
 #: of one case (and of consecutive sweep points on one worker) share one computation.
-MACHINE_MEMO_SIZE = 8
-_machines: OrderedDict = OrderedDict()
+MEMO_SIZE = 8
+_memo_items: OrderedDict = OrderedDict()
 
 
 def finite(obj):
@@ -45,11 +45,11 @@ def _memo(case, kind: str, make):
     from .stages import GEOMETRY_READS, select
 
     key = (kind, digest(select(case.raw, GEOMETRY_READS)))
-    if key not in _machines:
-        _machines[key] = make()
-        while len(_machines) > MACHINE_MEMO_SIZE:
-            _machines.popitem(last=False)
-    return _machines[key]
+    if key not in _memo_items:
+        _memo_items[key] = make()
+        while len(_memo_items) > MEMO_SIZE:
+            _memo_items.popitem(last=False)
+    return _memo_items[key]
 
 
 def _machine(case):
@@ -66,27 +66,14 @@ def _table(case):
     return _memo(case, "table", lambda: chamber_table(case, _machine(case)))
 
 
-def _quasi1d_settings(raw: dict, where: str) -> tuple:
-    from rotorflow.quasi1d import Leakage, Mechanical, Numerics, Operating, Ports
-
-    return (Operating.from_section(raw["operating"], where),
-            Leakage.from_section(raw.get("leakage", {}), where),
-            Ports.from_section(raw.get("ports", {}), where),
-            Numerics.from_section(raw.get("numerics", {}), where),
-            Mechanical.from_section(raw.get("mechanical", {}), where))
-
-
 def check_quasi1d(case, case_path) -> None:
     """The quasi-1D stage's refusals: its settings, and the port timing against the
-    chamber's life (the chamber table built in process from the memoised machine that
-    the geometry and table stages then reuse)."""
-    from rotorflow.quasi1d.chamber import prepare
+    chamber's life (on the chamber table the table stage then reuses)."""
+    from rotorflow.quasi1d import case_settings
+    from rotorflow.quasi1d.simulate import chamber_of
 
-    operating, _, _, numerics, _ = _quasi1d_settings(case.raw, str(case_path))
-    operating.check_ideal_gas()
-    prepare(_table(case), operating.volume_ratio,
-            operating.suction_close_rad, operating.discharge_open_rad, operating.speed_rpm,
-            numerics.vanish_fraction, operating.discharge_early_opening_rad)
+    operating, _, _, numerics, _ = case_settings(case.raw, str(case_path))
+    chamber_of(_table(case), operating, numerics)
 
 
 def check_solids(case, case_path) -> None:
@@ -122,10 +109,10 @@ def run_table(ctx: StageContext) -> dict:
 
 def run_quasi1d(ctx: StageContext) -> dict:
     from rotorflow.geometry import table
-    from rotorflow.quasi1d import simulate
+    from rotorflow.quasi1d import case_settings, simulate
 
     tab = table.read(ctx.input("table") / "chamber_table.csv")
-    result = simulate(tab, *_quasi1d_settings(ctx.raw, str(ctx.case_path)))
+    result = simulate(tab, *case_settings(ctx.raw, str(ctx.case_path)))
     summary = result.summary()
     write_json(ctx.out / "summary.json", summary)
     result.write_traces(ctx.out)

@@ -71,7 +71,7 @@ def cmd_contacts(args) -> int:
 
 def cmd_simulate(args) -> int:
     from rotorflow.geometry.summary import chamber_table
-    from rotorflow.quasi1d import Leakage, Mechanical, Numerics, Operating, Ports, simulate
+    from rotorflow.quasi1d import case_settings, simulate
     from rotorflow.workflow.builtin import finite
     from rotorflow.workflow.case import load_case
 
@@ -80,12 +80,7 @@ def cmd_simulate(args) -> int:
     if "p_suction_bar" not in raw.get("operating", {}):
         raise CaseError(f"[operating] of {where} needs p_suction_bar (and the rest of the "
                         "operating point) to simulate")
-    operating = Operating.from_section(raw["operating"], where)
-    leakage = Leakage.from_section(raw.get("leakage", {}), where)
-    ports = Ports.from_section(raw.get("ports", {}), where)
-    numerics = Numerics.from_section(raw.get("numerics", {}), where)
-    mechanical = Mechanical.from_section(raw.get("mechanical", {}), where)
-    result = simulate(chamber_table(case), operating, leakage, ports, numerics, mechanical)
+    result = simulate(chamber_table(case), *case_settings(raw, where))
     if args.traces:
         out = Path(args.traces)
         out.parent.mkdir(parents=True, exist_ok=True)

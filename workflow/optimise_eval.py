@@ -68,14 +68,9 @@ def _flat(prefix: str, d: dict) -> dict:
 
 def _quasi1d(case, machine, raw: dict, where: str) -> dict:
     from rotorflow.geometry.summary import chamber_table
-    from rotorflow.quasi1d import Leakage, Mechanical, Numerics, Operating, Ports, simulate
+    from rotorflow.quasi1d import case_settings, simulate
 
-    result = simulate(chamber_table(case, machine),
-                      Operating.from_section(raw["operating"], where),
-                      Leakage.from_section(raw.get("leakage", {}), where),
-                      Ports.from_section(raw.get("ports", {}), where),
-                      Numerics.from_section(raw.get("numerics", {}), where),
-                      Mechanical.from_section(raw.get("mechanical", {}), where))
+    result = simulate(chamber_table(case, machine), *case_settings(raw, where))
     return _flat("quasi1d", result.summary())
 
 

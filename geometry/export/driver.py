@@ -193,7 +193,7 @@ def _meshes(case, asm: Assembly, out: Path, manifest: dict) -> None:
             # A deviation within tolerance can still miss the volume (a straight flank's
             # chords all sag one way): refine until the solid's volume holds too.
             for _ in range(VOLUME_REFINES):
-                if rel_error(_volume(mesh), analytic) <= VOLUME_RTOL:
+                if rel_error(mesh.volume, analytic) <= VOLUME_RTOL:
                     break
                 tol *= 0.5
                 grids[p.name], devs[p.name] = flank_to_tolerance(p.surface, tol)
@@ -236,12 +236,6 @@ def _machining(asm: Assembly, out: Path, manifest: dict) -> None:
                           f"rotorflow {name} rotor flank, {unit}")
                 files[f"{name}_cloud.ply"] = {"points": len(pts)}
         manifest["timing_s"]["clouds_s"] = time.perf_counter() - t0
-
-
-def _volume(mesh: TriMesh) -> float:
-    """Enclosed volume by the divergence theorem (closed, outward-oriented faces)."""
-    v = mesh.vertices[mesh.faces]
-    return float(np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2])).sum() / 6.0)
 
 
 def _write_stl(path: Path, mesh: TriMesh, scale: float, analytic: float,

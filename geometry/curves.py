@@ -21,11 +21,11 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from rotorflow.errors import CaseError
 
 from .planar import cross
+from .spline import CubicSpline
 
 #: Pre-grid per piece on which curvature is tabulated to place samples.
 PREGRID = 513

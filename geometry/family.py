@@ -34,6 +34,7 @@ one line that lists the known types.
 
 from __future__ import annotations
 
+import importlib
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
@@ -171,22 +172,32 @@ def register(family: Family) -> Family:
     return family
 
 
+#: The built-in families by type, each imported (and so registered) only when a case
+#: asks for it: the twin-screw package alone pulls in scipy.spatial/optimize, 0.3 s that
+#: an internal-gear case should not pay.
+BUILTIN = {"internal-gear": "internal_gear", "twin-screw": "twin_screw"}
+
+
 def families() -> dict[str, Family]:
-    _load_builtin()
+    for type_ in BUILTIN:
+        _load_builtin(type_)
     return dict(_REGISTRY)
 
 
 def family_for(type_: object, where: str) -> Family:
-    _load_builtin()
+    if isinstance(type_, str):
+        _load_builtin(type_)
     if not isinstance(type_, str) or type_ not in _REGISTRY:
+        known = sorted(set(_REGISTRY) | set(BUILTIN))
         raise CaseError(f"unknown machine type {type_!r} in {where} "
-                        f"(known: {', '.join(sorted(_REGISTRY))})")
+                        f"(known: {', '.join(known)})")
     return _REGISTRY[type_]
 
 
-def _load_builtin() -> None:
-    # The built-in families register themselves on import.
-    from . import internal_gear, twin_screw  # noqa: F401
+def _load_builtin(type_: str) -> None:
+    # A built-in family registers itself on import.
+    if type_ in BUILTIN and type_ not in _REGISTRY:
+        importlib.import_module(f"{__package__}.{BUILTIN[type_]}")
 
 
 def number(section: dict, key: str, where: str, *, integer: bool = False):

@@ -20,12 +20,12 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.interpolate import CubicSpline
-from scipy.optimize import minimize_scalar
 
 from .family import RotorPair
 from .lines import line_lengths, stretches
+from .scalar import minimum
 from .section import POINTS_PER_PERIOD, SectionChamber
+from .spline import CubicSpline
 from .sweep import Sweep
 
 #: Section-table samples per step of the chamber curves.  The load error is the section
@@ -366,13 +366,8 @@ class SweptMachine:
         c = self.curves
         k = int(np.argmax(c.volume))
         lo, hi = c.phi[max(k - 1, 0)], c.phi[min(k + 1, len(c.phi) - 1)]
-        res = minimize_scalar(
-            lambda x: -float(self.volume_at(x)[0]),
-            bounds=(lo, hi),
-            method="bounded",
-            options={"xatol": 1e-10},
-        )
-        return max(float(-res.fun), float(c.volume[k]))
+        _, least = minimum(lambda x: -float(self.volume_at(x)[0]), lo, hi, xtol=1e-10)
+        return max(-least, float(c.volume[k]))
 
     @property
     def swept_volume(self) -> float:

@@ -6,9 +6,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from rotorflow.errors import CaseError
+from rotorflow.geometry.scalar import minimum
 
 
 def sigma_limit(lobes_outer: int, lam: float, samples: int = 20001) -> float:
@@ -36,13 +36,8 @@ def sigma_limit(lobes_outer: int, lam: float, samples: int = 20001) -> float:
     if not np.isfinite(z[i]):
         raise CaseError(f"no undercut-free pin radius exists for N1={lobes_outer}, lambda={lam}")
     lo, hi = phi[max(i - 1, 0)], phi[min(i + 1, samples - 1)]
-    res = minimize_scalar(
-        lambda p: zeta(p) if zeta(p) > 0 else np.inf,
-        bounds=(lo, hi),
-        method="bounded",
-        options={"xatol": 1e-13},
-    )
-    return float(min(res.fun, z[i]))
+    _, least = minimum(lambda p: zeta(p) if zeta(p) > 0 else np.inf, lo, hi, xtol=1e-13)
+    return float(min(least, z[i]))
 
 
 def pressure_angle_at_pitch(lam: float, sigma: float) -> float | None:

@@ -28,12 +28,12 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.optimize import brentq
 
 from rotorflow.errors import CaseError
 
 from ..family import Rotor, RotorPair
 from ..planar import TWO_PI, cross, rotate
+from ..scalar import root
 from .limits import pressure_angle_at_pitch, sigma_limit
 
 #: A pin above its undercut limit by this share is the limit written with fewer digits
@@ -224,7 +224,7 @@ class PinGerotor(RotorPair):
         k = int(np.argmax(vals > 0.0))
         if k == 0:
             raise CaseError("degenerate pin profile: no conjugate fillet between pins")
-        g_hi = brentq(lambda g: float(off(g)), gs[k - 1], gs[k], xtol=1e-14)
+        g_hi = root(lambda g: float(off(g)), gs[k - 1], gs[k], xtol=1e-14)
         return 2.0 * math.pi - g_hi, g_hi
 
     def fillet(self, g):

@@ -21,9 +21,9 @@ from functools import cached_property
 
 import numpy as np
 from numpy.polynomial import chebyshev as C
-from scipy.interpolate import CubicSpline
 
 from ..planar import TWO_PI, cross, rotate
+from ..spline import CubicSpline
 from .pair import PinGerotor
 
 #: Starting samples per inner lobe for the Fourier antiderivative, the cap, and the

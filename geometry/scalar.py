@@ -1,0 +1,92 @@
+"""Bracketed scalar root and minimum, in plain Python.
+
+Why not scipy.optimize.brentq / minimize_scalar: importing scipy.optimize costs about
+0.2 s, and the geometry of every case needs one root (the fillet's end) and two polished
+extrema (the undercut limit, the largest chamber volume). Both searches keep a bracket
+at every step, so they cannot leave it, and stop on an absolute x tolerance as the scipy
+calls they replace did. Checked against closed forms and scipy in tests/test_scalar.py.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+#: Golden-section ratio: the bracket shrinks by this factor per evaluation.
+_GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+#: Enough steps for any bracket of doubles to shrink to one ulp (2^-1074 .. 2^1024).
+MAX_STEPS = 2200
+
+
+def root(f: Callable[[float], float], a: float, b: float, xtol: float = 1e-14) -> float:
+    """A zero of ``f`` in [a, b], where f(a) and f(b) differ in sign.
+
+    Regula falsi with the Illinois modification (the retained end's value is halved
+    when the same end is kept twice, which restores superlinear convergence), falling
+    back to bisection whenever the secant step would shrink the bracket too little.
+    """
+    fa, fb = f(a), f(b)
+    if fa == 0.0:
+        return a
+    if fb == 0.0:
+        return b
+    if (fa > 0.0) == (fb > 0.0):
+        raise ValueError(f"root not bracketed: f({a}) = {fa}, f({b}) = {fb}")
+    side = 0
+    for _ in range(MAX_STEPS):
+        width = abs(b - a)
+        if width <= xtol:
+            break
+        x = (a * fb - b * fa) / (fb - fa)
+        if not (min(a, b) < x < max(a, b)):
+            x = 0.5 * (a + b)
+        fx = f(x)
+        if fx == 0.0:
+            return x
+        if (fx > 0.0) == (fb > 0.0):
+            b, fb = x, fx
+            if side == -1:
+                fa *= 0.5
+            side = -1
+        else:
+            a, fa = x, fx
+            if side == 1:
+                fb *= 0.5
+            side = 1
+        if abs(b - a) > 0.5 * width:
+            # The secant crept along one end: bisect once to guarantee the bracket halves.
+            m = 0.5 * (a + b)
+            fm = f(m)
+            if fm == 0.0:
+                return m
+            if (fm > 0.0) == (fb > 0.0):
+                b, fb = m, fm
+            else:
+                a, fa = m, fm
+            side = 0
+    return a if abs(fa) < abs(fb) else b
+
+
+def minimum(f: Callable[[float], float], lo: float, hi: float,
+            xtol: float = 1e-10) -> tuple[float, float]:
+    """(x, f(x)) at a local minimum of ``f`` inside [lo, hi], by golden-section search.
+
+    For a function unimodal on the bracket this is its minimum; the caller brackets it
+    from a sampled scan, as scipy's bounded method was used here.
+    """
+    a, b = (lo, hi) if lo <= hi else (hi, lo)
+    x1 = b - _GOLDEN * (b - a)
+    x2 = a + _GOLDEN * (b - a)
+    f1, f2 = f(x1), f(x2)
+    for _ in range(MAX_STEPS):
+        if b - a <= xtol:
+            break
+        if f1 <= f2:
+            b, x2, f2 = x2, x1, f1
+            x1 = b - _GOLDEN * (b - a)
+            f1 = f(x1)
+        else:
+            a, x1, f1 = x1, x2, f2
+            x2 = a + _GOLDEN * (b - a)
+            f2 = f(x2)
+    return (x1, f1) if f1 <= f2 else (x2, f2)

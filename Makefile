@@ -16,7 +16,7 @@ PYTEST_ARGS ?=
 
 -include mk/*.mk
 
-.PHONY: help venv demo test lint bench case sweep optimise report clean export
+.PHONY: help venv demo test lint bench case sweep optimise map report clean export
 
 help: ## list the targets
 	@grep -hE '^[a-zA-Z_-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  %-10s %s\n", $$1, $$2}'
@@ -40,6 +40,9 @@ sweep: $(STAMP) ## run a sweep on a local Dask cluster: make sweep SWEEP=example
 
 optimise: $(STAMP) ## multi-objective search of a case's [optimise] section: make optimise CASE=examples/optimise_table1_inner_ev2.toml
 	$(VENV)/bin/rotorflow optimise $(if $(filter command line,$(origin CASE)),$(CASE),$(OPTIMISE_CASE))
+
+map: $(STAMP) ## performance map over speed and pressure ([map] section): make map CASE=... (into build/map/<case>)
+	$(VENV)/bin/rotorflow map $(CASE)
 
 report: $(STAMP) ## HTML report of a case (build/<case>/report/index.html): make report CASE=...
 	$(VENV)/bin/rotorflow run $(CASE) --want report

@@ -30,7 +30,7 @@ WRAP_KEY = "wrap_{}_deg"
 OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven", "discharge_port"}
 SECTIONS = {
     "machine", "sweep", "operating", "leakage", "ports", "numerics", "mechanical", "export",
-    "outputs", "cfd", "cfd_chamber", "optimise", "plausibility",
+    "outputs", "cfd", "cfd_chamber", "optimise", "plausibility", "map",
 }
 
 
@@ -259,6 +259,10 @@ def validate_stage_sections(data: dict, path: Path, pair: RotorPair | None = Non
         from rotorflow.workflow.optimise_spec import check_section
 
         check_section(data["optimise"], path)
+    if "map" in data:  # owned by `rotorflow map`
+        from rotorflow.workflow.perf_map import map_spec
+
+        map_spec(data, str(path))
     if "outputs" in data:  # the stages a case asks for (rotorflow run)
         from rotorflow.workflow.stages import plan, validate_outputs
 

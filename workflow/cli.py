@@ -181,6 +181,23 @@ def cmd_optimise(args) -> int:
     return 0
 
 
+def cmd_map(args) -> int:
+    from rotorflow.workflow.perf_map_run import run_map
+
+    _log_setup(args.verbose)
+    record = run_map(args.case, args.build / "map" / Path(args.case).stem,
+                     cluster=_cluster(args), serial=args.serial, progress=not args.no_progress)
+    if args.json:
+        print(json.dumps(record, indent=2))
+    else:
+        print(f"map {Path(args.case).stem}: {record['points']} points, {record['converged']} "
+              f"converged, {record['seconds']:.1f} s ({record['where']})")
+        for line in record["failed"]:
+            print(f"  not converged: {line}")
+        print(f"csv: {record['csv']}\nreport: {record['report']}")
+    return 0 if not record["failed"] else 1
+
+
 def cmd_export(args) -> int:
     from rotorflow.geometry.export.driver import export
     from rotorflow.geometry.export.settings import Export
@@ -266,6 +283,12 @@ def build_parser() -> argparse.ArgumentParser:
                   "evaluate one design after another in this process (no Dask)")
     o.add_argument("--json", action="store_true", help="print the run's record as JSON")
     o.set_defaults(func=cmd_optimise)
+    m = sub.add_parser("map", help="performance map over speed and discharge (or suction) "
+                       "pressure ([map] section): CSV, contour plots, report page")
+    m.add_argument("case", type=Path)
+    m.add_argument("--json", action="store_true", help="the run's record as JSON")
+    _cluster_args(m, "BUILD/map/<case>/", "compute the points in this process, no Dask")
+    m.set_defaults(func=cmd_map)
     return parser
 
 

@@ -265,7 +265,7 @@ def load_optimise(path: Path, cluster_overrides: dict | None = None) -> Optimise
     variable's key and both its bounds (the case loader must accept each), and every
     figure's name (the stages must compute it, at the middle of the bounds)."""
     from .case import case_from_raw, load_toml
-    from .sweep_file import _cluster
+    from .sweep_file import cluster_spec
 
     path = Path(path)
     data = load_toml(path)
@@ -279,7 +279,7 @@ def load_optimise(path: Path, cluster_overrides: dict | None = None) -> Optimise
     spec = OptimiseSpec(path=path, name=path.stem, base_raw=base_raw, variables=variables,
                         objectives=objectives, constraints=constraints,
                         population=population, generations=generations, seed=seed,
-                        reference=ref, cluster=_cluster(path, cluster, cluster_overrides or {}),
+                        reference=ref, cluster=cluster_spec(path, cluster, cluster_overrides or {}),
                         polish=polish, separate=separate)
     _check_variables(spec)
     _check_figures(spec)

@@ -155,7 +155,7 @@ def load_sweep(path: Path, cluster_overrides: dict | None = None) -> SweepSpec:
     params, axes, rows = _rows(path, data, base_raw)
     return SweepSpec(path=path, name=path.stem, base=base, base_raw=base_raw, want=want,
                      report=report, params=params, axes=axes, points=_named(path, rows),
-                     cluster=_cluster(path, data.get("cluster", {}), cluster_overrides or {}))
+                     cluster=cluster_spec(path, data.get("cluster", {}), cluster_overrides or {}))
 
 
 def _study(path: Path, data: dict) -> tuple[Path, dict, list[str], bool]:
@@ -295,7 +295,8 @@ def _samples(path, name: str, r, rng, n: int) -> list:
     return [float(v) for v in rng.uniform(r[0], r[1], n)]
 
 
-def _cluster(path, spec, overrides) -> ClusterSpec:
+def cluster_spec(path, spec, overrides) -> ClusterSpec:
+    """The cluster of a [cluster] table with command-line ``overrides`` (None: unset)."""
     if not isinstance(spec, dict):
         raise _err(path, "[cluster] must be a table")
     for k in spec:

@@ -12,6 +12,7 @@ MODULES = (
     "bench.bench_geometry",
     "bench.bench_twin_screw",
     "bench.bench_quasi1d",
+    "bench.bench_pdsim",
     "bench.bench_real_fluid",
     "bench.bench_solids",
     "bench.bench_cfd",

@@ -166,8 +166,11 @@ def _period(model, y0, method, rtol, atol, replay, record, max_steps, h0, stiff_
 
 
 def _err_norm(err, y, y_new, rtol, atol):
+    # The largest component error, not the RMS: an RMS over all slots and accumulators
+    # lets one chamber's pressure oscillate by 7-13 % of p_discharge at rtol 5e-4-1e-3
+    # while the other components dilute its error (issue 19, nozzle ports near balance).
     sc = atol + rtol * np.maximum(np.abs(y), np.abs(y_new))
-    e = np.sqrt(np.mean((err / sc) ** 2, axis=1))
+    e = np.max(np.abs(err / sc), axis=1)
     m = float(np.max(e))
     return m if np.isfinite(m) else np.inf
 

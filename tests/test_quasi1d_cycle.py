@@ -75,7 +75,7 @@ def test_ideal_cycle_work_equals_eq17(table):
 
 def test_closed_chamber_compresses_adiabatically(table):
     res = simulate(table, _perfect_op(), Leakage(model="none"), Ports("ideal"),
-                   Numerics(rtol=1e-7, atol=1e-9))
+                   Numerics(rtol=1e-8, atol=1e-10))
     geo = res.solution.model.geo
     c = res.chamber
     a = c["angle_rad"]
@@ -83,7 +83,8 @@ def test_closed_chamber_compresses_adiabatically(table):
     assert closed.sum() > 5
     pv = c["p_Pa"][closed] * c["volume_m3"][closed] ** GAMMA
     ref = 1e5 * geo.v_trapped**GAMMA
-    # isentropic p V^gamma = const to the integration tolerance (rtol 1e-7)
+    # isentropic p V^gamma = const to the integration error: a global error, some ten
+    # times the step tolerance (1.1e-6 at rtol 1e-7 with the max norm), hence rtol 1e-8
     assert np.max(np.abs(pv / ref - 1.0)) < 1e-6
     # mass is trapped: m constant between closing and opening
     m = c["m_kg"][closed]
@@ -154,8 +155,11 @@ def test_tiny_gap_tends_to_the_leak_free_cycle(table):
 
 def test_newton_and_plain_iteration_find_the_same_cycle(table):
     leak = Leakage(gap_m=5e-6, model="nozzle", coefficient=0.5)
-    a = simulate(table, _op(), leak, numerics=Numerics(newton=True))
-    b = simulate(table, _op(), leak, numerics=Numerics(newton=False, max_cycles=200))
+    # rtol 1e-7: the two integrate their last period by other step sequences, so their
+    # figures differ by the integration error of the power accumulator (2e-5 at rtol
+    # 5e-4 and 1e-5, 1e-6 at 1e-7), which must sit below the 1e-5 compared here
+    a = simulate(table, _op(), leak, numerics=Numerics(newton=True, rtol=1e-7))
+    b = simulate(table, _op(), leak, numerics=Numerics(newton=False, max_cycles=200, rtol=1e-7))
     assert a.converged and b.converged
     assert a.figures["cycles"] < b.figures["cycles"]
     for key in ("mass_flow_kg_s", "indicated_power_W", "discharge_temperature_K"):

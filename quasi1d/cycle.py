@@ -37,6 +37,14 @@ from .settings import Numerics
 FORCE_REPLAY_BELOW = 1.0e-3
 # Times the tolerance is tightened tenfold when Newton's method stalls.
 STALL_TIGHTEN = 2
+# Periods Newton's method may go without halving its best residual before the solver
+# switches to Anderson acceleration of the plain iteration: where flows reverse (a
+# machine whose leakage exceeds its displacement) the period map has kinks, the
+# finite-difference Jacobian points past them, and damped Newton steps cycle at a
+# residual of ~1e-4 (a CO2 stress point: steps 3000 times the residual).
+NEWTON_PATIENCE = 8
+# Past iterates Anderson's least-squares extrapolation combines (Walker & Ni 2011: 3-10).
+ANDERSON_MEMORY = 5
 # Finite-difference step of the Jacobian, relative to each component's reference scale:
 # large against round-off (1e-16 / 1e-6) and small against curvature.
 FD_STEP = 1.0e-6
@@ -142,6 +150,8 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
     lam = 1.0
     rtol = num.rtol
     tightened = 0
+    mark, since_gain = np.inf, 0  # Newton's best residual at its last halving; periods since
+    anderson = None  # the iterate history once Anderson acceleration has taken over
     deadline = time.perf_counter() + num.max_seconds
     for _ in range(num.max_cycles):
         if cycles and time.perf_counter() > deadline:
@@ -167,6 +177,9 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
         if max(dp, dT) < num.cycle_rtol and max(mc, ec) < num.balance_tol:
             converged = True
             break
+        if anderson is not None:
+            z = _anderson(model, anderson, z, z_next, idx, scales)
+            continue
         if not newton:
             z = z_next
             continue
@@ -176,6 +189,14 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
         norm = float(np.max(np.abs(z_next - z)[idx] / scales[idx]))
         best, lam = _update_best(model, run, z, z_next, idx, dz, norm, best, lam,
                                  (dp, dT, mc, ec))
+        if best[0] < 0.5 * mark:
+            mark, since_gain = best[0], 0
+        else:
+            since_gain += 1
+        if since_gain >= NEWTON_PATIENCE:
+            newton, anderson = False, []
+            z = best[4]
+            continue
         z = best[4]
         if best[3] is not None and lam >= 1.0 / 16.0:
             z = _damped(model, best, idx, lam)
@@ -202,6 +223,28 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
     model.work.clear()
     return CycleSolution(model, z, run, cycles, converged, message, dp, dT, mc, ec, cm, ce,
                          n_rhs)
+
+
+def _anderson(model, hist: list, z, z_next, idx, scales):
+    """The next iterate by Anderson acceleration (type II) of z <- Phi(z): the
+    combination of the last ANDERSON_MEMORY map images whose residuals, combined
+    likewise, are least in the least-squares sense; the plain image where that state is
+    not physical (the history then restarts)."""
+    hist.append((z[idx] / scales[idx], z_next[idx] / scales[idx]))
+    del hist[:-(ANDERSON_MEMORY + 1)]
+    if len(hist) < 2:
+        return z_next
+    X = np.array([h[0] for h in hist])
+    G = np.array([h[1] for h in hist])
+    F = G - X
+    dF, dG = np.diff(F, axis=0), np.diff(G, axis=0)
+    gamma = np.linalg.lstsq(dF.T, F[-1], rcond=None)[0]
+    cand = z_next.copy()
+    cand[idx] = (G[-1] - dG.T @ gamma) * scales[idx]
+    if np.all(np.isfinite(cand)) and _plausible(model, cand):
+        return cand
+    hist.clear()
+    return z_next
 
 
 def _first_method(model: ChamberModel, num: Numerics) -> str:

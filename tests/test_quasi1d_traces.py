@@ -4,8 +4,9 @@ One chamber of the default case, air, isentropic-nozzle ports of coefficient 1 t
 the end-face port areas, no leakage. Against scipy's Radau (an independent implicit
 integrator) at a tight tolerance, the default numerics must hold the chamber's pressure
 trace within 0.1 % of the discharge pressure at every point of the cycle, and the mass
-flow and power within 0.1 %. With the former RMS error norm the trace oscillated by
-6.7 % of p_discharge at this tolerance while the integrals stayed within 1e-4.
+flow and power within 0.1 %; so must a tolerance five times looser, where the former
+RMS error norm let the trace oscillate by 6.7 % of p_discharge while the integrals
+stayed within 1e-4.
 """
 
 from pathlib import Path
@@ -36,11 +37,17 @@ def _trace_error(res, ref, p_discharge):
     return float(np.max(np.abs(p - np.interp(th, th_r, p_r)))) / p_discharge
 
 
-def test_default_tolerance_holds_the_trace_and_the_figures(problem):
+@pytest.fixture(scope="module")
+def reference(problem):
     table, op, leak, ports = problem
-    ref = simulate(table, op, leak, ports, REFERENCE)
-    res = simulate(table, op, leak, ports, Numerics())
-    assert res.converged and ref.converged
-    assert _trace_error(res, ref, op.p_discharge_Pa) < 1e-3
+    return simulate(table, op, leak, ports, REFERENCE)
+
+
+@pytest.mark.parametrize("rtol", [Numerics().rtol, 5e-4])
+def test_tolerance_holds_the_trace_and_the_figures(problem, reference, rtol):
+    table, op, leak, ports = problem
+    res = simulate(table, op, leak, ports, Numerics(rtol=rtol))
+    assert res.converged and reference.converged
+    assert _trace_error(res, reference, op.p_discharge_Pa) < 1e-3
     for key in ("mass_flow_kg_s", "indicated_power_W"):
-        assert res.figures[key] == pytest.approx(ref.figures[key], rel=1e-3)
+        assert res.figures[key] == pytest.approx(reference.figures[key], rel=1e-3)

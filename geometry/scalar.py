@@ -33,9 +33,10 @@ def root(f: Callable[[float], float], a: float, b: float, xtol: float = 1e-14) -
     if (fa > 0.0) == (fb > 0.0):
         raise ValueError(f"root not bracketed: f({a}) = {fa}, f({b}) = {fb}")
     side = 0
+    best = (abs(fa), a) if abs(fa) < abs(fb) else (abs(fb), b)  # by the true values
     for _ in range(MAX_STEPS):
         width = abs(b - a)
-        if width <= xtol:
+        if width <= xtol or 0.5 * (a + b) in (a, b):  # (adjacent doubles: nothing between)
             break
         x = (a * fb - b * fa) / (fb - fa)
         if not (min(a, b) < x < max(a, b)):
@@ -43,6 +44,7 @@ def root(f: Callable[[float], float], a: float, b: float, xtol: float = 1e-14) -
         fx = f(x)
         if fx == 0.0:
             return x
+        best = min(best, (abs(fx), x))
         if (fx > 0.0) == (fb > 0.0):
             b, fb = x, fx
             if side == -1:
@@ -59,12 +61,13 @@ def root(f: Callable[[float], float], a: float, b: float, xtol: float = 1e-14) -
             fm = f(m)
             if fm == 0.0:
                 return m
+            best = min(best, (abs(fm), m))
             if (fm > 0.0) == (fb > 0.0):
                 b, fb = m, fm
             else:
                 a, fa = m, fm
             side = 0
-    return a if abs(fa) < abs(fb) else b
+    return best[1]  # (the Illinois halving scales the kept end's value: not comparable)
 
 
 def minimum(f: Callable[[float], float], lo: float, hi: float,

@@ -74,6 +74,27 @@ class CubicSpline:
             out = np.where(outside[trail], np.nan, out)
         return out.reshape(xq.shape + y.shape[1:])
 
+    def integrate(self, a: float, b: float):
+        """The spline's integral from ``a`` to ``b``, both within the knots."""
+        lo, hi = self.x[0], self.x[-1]
+        if not (lo <= a <= hi and lo <= b <= hi):
+            raise ValueError(f"integration bounds [{a}, {b}] outside the knots [{lo}, {hi}]")
+        return _integral_to(self, b) - _integral_to(self, a)
+
+
+def _integral_to(spline: CubicSpline, xq: float):
+    """Integral of the spline from its first knot to ``xq`` (inside the knots)."""
+    x, y, h, m = spline.x, spline.y, spline.h, spline.m
+    hc = _col(h, y)
+    whole = hc * 0.5 * (y[:-1] + y[1:]) - hc ** 3 * (m[:-1] + m[1:]) / 24.0
+    cum = np.concatenate([np.zeros((1,) + y.shape[1:]), np.cumsum(whole, axis=0)])
+    i = int(np.clip(np.searchsorted(x, xq, side="right") - 1, 0, len(x) - 2))
+    t, hi = xq - x[i], h[i]
+    m0, m1 = m[i], m[i + 1]
+    b = (y[i + 1] - y[i]) / hi - hi * (2.0 * m0 + m1) / 6.0
+    c3 = (m1 - m0) / (6.0 * hi)
+    return cum[i] + t * (y[i] + t * (b / 2.0 + t * (m0 / 6.0 + t * c3 / 4.0)))
+
 
 def _second_derivatives(x, y, h, periodic: bool) -> np.ndarray:
     """Knot second derivatives M from continuity of the slope (and the end conditions)."""

@@ -146,11 +146,9 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
     message = ""
     converged = False
     dp = dT = mc = ec = np.inf
-    best = None  # the iterate with the smallest residual: (norm, z, run, step, z_next, figures)
-    lam = 1.0
+    nw = _NewtonState()
     rtol = num.rtol
     tightened = 0
-    mark, since_gain = np.inf, 0  # Newton's best residual at its last halving; periods since
     anderson = None  # the iterate history once Anderson acceleration has taken over
     deadline = time.perf_counter() + num.max_seconds
     for _ in range(num.max_cycles):
@@ -183,23 +181,10 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
         if not newton:
             z = z_next
             continue
-        # Damped Newton on Phi(z) - z: a full step from the best iterate so far; a step
-        # that does not lower the residual is halved (the map has kinks where flows
-        # reverse), and after four halvings a plain cycle step restarts the search.
-        norm = float(np.max(np.abs(z_next - z)[idx] / scales[idx]))
-        best, lam = _update_best(model, run, z, z_next, idx, dz, norm, best, lam,
-                                 (dp, dT, mc, ec))
-        if best[0] < 0.5 * mark:
-            mark, since_gain = best[0], 0
-        else:
-            since_gain += 1
-        if since_gain >= NEWTON_PATIENCE:
-            newton, anderson = False, []
-            z = best[4]
-            continue
-        z = best[4]
-        if best[3] is not None and lam >= 1.0 / 16.0:
-            z = _damped(model, best, idx, lam)
+        kind, z_new = _newton_next(model, nw, run, z, z_next, idx, dz, scales, (dp, dT, mc, ec))
+        if kind != "stalled":
+            newton, anderson = (False, []) if kind == "anderson" else (newton, anderson)
+            z = z_new
         elif tightened < STALL_TIGHTEN:
             # Newton stalled: at a coarse tolerance the period map has kinks (flows that
             # reverse inside a step); restart from the best state with a tighter one
@@ -207,12 +192,14 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
             rtol *= 0.1
             atol = atol * 0.1
             replay = None
-            z = best[1]
-            best = None
+            z = nw.best[1]
+            nw.best = None
             dp = dT = mc = ec = np.inf
         else:
-            best = None
+            z = nw.best[4]
+            nw.best = None
     if not converged:
+        best = nw.best
         if best is not None and best[0] < float(np.max(np.abs(z_next - z)[idx] / scales[idx])):
             _, z, run, _, _, (dp, dT, mc, ec) = best
         message = (message or f"cycle not converged after {num.max_cycles} periods: ") + (
@@ -223,6 +210,35 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
     model.work.clear()
     return CycleSolution(model, z, run, cycles, converged, message, dp, dT, mc, ec, cm, ce,
                          n_rhs)
+
+
+@dataclass
+class _NewtonState:
+    #: the iterate with the smallest residual: (norm, z, run, step, z_next, figures)
+    best: tuple | None = None
+    lam: float = 1.0  # damping of the next step from the best iterate
+    mark: float = np.inf  # the best residual when it last halved
+    since_gain: int = 0  # periods since
+
+
+def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figures):
+    """Damped Newton on Phi(z) - z: a full step from the best iterate so far; a step
+    that does not lower the residual is halved (the map has kinks where flows reverse).
+    Returns ("step", next iterate), ("stalled", None) after four halvings, or
+    ("anderson", the best iterate's image) when the best residual has not halved in
+    NEWTON_PATIENCE periods."""
+    norm = float(np.max(np.abs(z_next - z)[idx] / scales[idx]))
+    nw.best, nw.lam = _update_best(model, run, z, z_next, idx, dz, norm, nw.best, nw.lam,
+                                   figures)
+    if nw.best[0] < 0.5 * nw.mark:
+        nw.mark, nw.since_gain = nw.best[0], 0
+    else:
+        nw.since_gain += 1
+    if nw.since_gain >= NEWTON_PATIENCE:
+        return "anderson", nw.best[4]
+    if nw.best[3] is not None and nw.lam >= 1.0 / 16.0:
+        return "step", _damped(model, nw.best, idx, nw.lam)
+    return "stalled", None
 
 
 def _anderson(model, hist: list, z, z_next, idx, scales):

@@ -39,13 +39,16 @@ def pair():
 @pytest.mark.parametrize("name", EXAMPLES)
 def test_fillet_table_is_the_closed_form(name):
     # The Hermite table stands in for the closed-form fillet in every evaluation; it must
-    # be the same curve far below any tolerance (1e-11 m = 2e-6 of 5 um).
+    # be the same curve far below any tolerance (2e-11 m = 4e-6 of 5 um). The largest
+    # error sits in the table's first interval, at the fillet's steep end: 1.0018e-11 m
+    # on the CRC.60, which a one-ulp change of the pin radius (the undercut limit found
+    # by golden section instead of Brent's method) moved across the former 1e-11.
     p = load_case(CASES / f"{name}.toml").pair
     prof = outer_profile(p)
     g_lo, g_hi = p.fillet_range
     g = np.random.default_rng(1).uniform(g_lo, g_hi, 20000)
     err = np.linalg.norm(prof._fillet_hermite(g, 0) - p.fillet(g)[1], axis=-1)
-    assert err.max() < 1e-11
+    assert err.max() < 2e-11
 
 
 @pytest.mark.parametrize("name", EXAMPLES)

@@ -76,3 +76,14 @@ def test_bad_input_named():
         CubicSpline([0.0, 1.0, 1.0], [0.0, 1.0, 2.0])
     with pytest.raises(ValueError, match="periodic"):
         CubicSpline([0.0, 1.0, 2.0], [0.0, 1.0, 2.0], bc_type="periodic")
+
+
+@pytest.mark.parametrize("bc", ["not-a-knot", "periodic"])
+def test_integral_matches_scipy(bc):
+    rng = np.random.default_rng(7)
+    x = _knots(40, rng, False)
+    y = rng.normal(size=40)
+    y[-1] = y[0]
+    ours, ref = CubicSpline(x, y, bc_type=bc), Reference(x, y, bc_type=bc)
+    for a, b in ((-1.0, 2.0), (-0.3, 1.7), (1.2, 0.1)):
+        assert ours.integrate(a, b) == pytest.approx(ref.integrate(a, b), abs=1e-12)

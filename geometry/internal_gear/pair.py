@@ -224,7 +224,7 @@ class PinGerotor(RotorPair):
         k = int(np.argmax(vals > 0.0))
         if k == 0:
             raise CaseError("degenerate pin profile: no conjugate fillet between pins")
-        g_hi = root(lambda g: float(off(g)), gs[k - 1], gs[k], xtol=1e-14)
+        g_hi = root(lambda g: float(off(g)), gs[k - 1], gs[k], xtol=0.0)
         return 2.0 * math.pi - g_hi, g_hi
 
     def fillet(self, g):

@@ -36,23 +36,25 @@ def chamber_of(table, operating: Operating, numerics: Numerics):
 
 
 def build_model(table, operating: Operating, leakage: Leakage | None = None,
-                ports: Ports | None = None, numerics: Numerics | None = None) -> ChamberModel:
+                ports: Ports | None = None, numerics: Numerics | None = None,
+                fluid=None) -> ChamberModel:
     """The chamber equations of ``table`` at ``operating`` (what :func:`simulate` and
     :func:`~rotorflow.quasi1d.transient.simulate_transient` integrate); the defaults are
-    :func:`simulate`'s."""
+    :func:`simulate`'s. ``fluid``: a fluid whose table spans this point's states (a
+    performance map shares one over its points), else the point's own."""
     if table is None:
         raise CaseError("no chamber table: the quasi-1D model needs the geometry's chamber table")
     leakage = leakage or Leakage(model="none")
     ports = ports or Ports()
     numerics = numerics or Numerics()
     geo = chamber_of(table, operating, numerics)
-    fluid = make_fluid(operating, geo.v_max / geo.v_discharge)
+    fluid = fluid or make_fluid(operating, geo.v_max / geo.v_discharge)
     return build(geo, fluid, operating, leakage, ports)
 
 
 def simulate(table, operating: Operating, leakage: Leakage | None = None,
              ports: Ports | None = None, numerics: Numerics | None = None,
-             mechanical: Mechanical | None = None) -> SimulationResult:
+             mechanical: Mechanical | None = None, fluid=None) -> SimulationResult:
     """Cycle-converged simulation of the machine whose chamber is ``table``.
 
     ``table`` is a :class:`rotorflow.geometry.table.ChamberTable`; the speed in
@@ -65,7 +67,7 @@ def simulate(table, operating: Operating, leakage: Leakage | None = None,
     The gas loads, mechanical loss and shaft power (:mod:`.shaft`) use ``mechanical``
     (default: the published coefficients of :class:`Mechanical`).
     """
-    model = build_model(table, operating, leakage, ports, numerics)
+    model = build_model(table, operating, leakage, ports, numerics, fluid)
     result = make_result(cycle.solve(model, numerics or Numerics()))
     extra, loads = shaft_figures(result, table, mechanical or Mechanical())
     return replace(result, figures={**result.figures, **extra}, loads=loads)

@@ -23,6 +23,8 @@ import math
 import time
 from dataclasses import dataclass
 
+import numpy as np
+
 from rotorflow.errors import CaseError
 
 #: Share of the case's speed and pressure rise that the default map spans either side.
@@ -30,6 +32,10 @@ DEFAULT_SPAN = 0.5
 DEFAULT_POINTS = 10
 #: A map point's balances must close to this (issue 19; the cycle's own tolerance is tighter).
 BALANCE_LIMIT = 1e-6
+#: Nodes a side of a map's shared CoolProp table: it spans the union of the points'
+#: ranges, up to ~2x one point's, so 300 keeps its cells within the default 200-node
+#: table's size (the real-fluid stress bench's reasoning; within 1.3e-4 of per-point tables).
+SHARED_TABLE_NODES = 300
 SECTION_KEYS = {"speed_rpm", "p_discharge_bar", "p_suction_bar", "points"}
 #: The columns of map.csv, in order (units in the names).
 COLUMNS = (
@@ -123,7 +129,33 @@ def point_raw(raw: dict, spec: MapSpec, speed: float, pressure: float) -> dict:
     return out
 
 
-def run_point(table, raw: dict, where: str) -> dict:
+def shared_fluid(table, raw: dict, spec: MapSpec, where: str):
+    """One CoolProp table over every state the map's points reach (the union of its four
+    corners' ranges), or None for the gas models (air's table is shared per process
+    already). Building a table takes ~1 s; a 10 x 10 map would build 100."""
+    from rotorflow.quasi1d import case_settings
+    from rotorflow.quasi1d.simulate import chamber_of
+    from rotorflow.quasi1d.coolprop_fluid import TabulatedFluid
+    from rotorflow.quasi1d.coolprop_table import reachable_box
+
+    if not str(raw["operating"].get("fluid", "")).startswith("CoolProp::"):
+        return None
+    boxes = []
+    for n in (spec.speeds[0],):  # the speed does not move the range
+        for p in (spec.pressures[0], spec.pressures[-1]):
+            op, _, _, num, _ = case_settings(point_raw(raw, spec, n, p), where)
+            geo = chamber_of(table, op, num)
+            boxes.append(reachable_box(op.fluid.split("::", 1)[1], op.p_suction_Pa,
+                                       op.p_discharge_Pa, op.T_suction_K, op.suction_quality,
+                                       op.wall_temperature_K, op.oil_temperature_K,
+                                       geo.v_max / geo.v_discharge))
+    b = np.array(boxes)
+    return TabulatedFluid.build(raw["operating"]["fluid"].split("::", 1)[1], b[:, 0].min(),
+                                b[:, 1].max(), b[:, 2].min(), b[:, 3].max(),
+                                nodes=SHARED_TABLE_NODES)
+
+
+def run_point(table, raw: dict, where: str, fluid=None) -> dict:
     """One map point through the product's quasi-1D model: a CSV row (COLUMNS)."""
     from rotorflow.quasi1d import case_settings, simulate
     from rotorflow.quasi1d.integrate import IntegrationError
@@ -135,7 +167,7 @@ def run_point(table, raw: dict, where: str) -> dict:
     row["pressure_ratio"] = row["p_discharge_bar"] / row["p_suction_bar"]
     t0 = time.perf_counter()
     try:
-        fig = simulate(table, *case_settings(raw, where)).summary()
+        fig = simulate(table, *case_settings(raw, where), fluid=fluid).summary()
     except (CaseError, IntegrationError) as exc:
         row["message"] = " ".join(str(exc).split())
         row["seconds"] = time.perf_counter() - t0

@@ -13,7 +13,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .perf_map import COLUMNS, MapSpec, map_spec, point_raw, run_point
+from .perf_map import COLUMNS, MapSpec, map_spec, point_raw, run_point, shared_fluid
 
 #: Figures drawn as contour plots: (column, label).
 PLOTTED = (
@@ -45,7 +45,8 @@ def run_map(case_path: Path, out: Path | None = None, *, cluster: dict | None = 
     for raw in jobs:
         case_settings(raw, where)
     table = chamber_table(case)
-    rows, where_run = _compute(table, jobs, where, spec, cluster, serial, progress)
+    fluid = shared_fluid(table, case.raw, spec, where)
+    rows, where_run = _compute(table, fluid, jobs, where, cluster, serial, progress)
     out = Path(out) if out else Path("build") / "map" / case.name
     out.parent.mkdir(parents=True, exist_ok=True)
     record = {
@@ -62,7 +63,7 @@ def run_map(case_path: Path, out: Path | None = None, *, cluster: dict | None = 
     return record
 
 
-def _compute(table, jobs: list[dict], where: str, spec: MapSpec, cluster, serial, progress):
+def _compute(table, fluid, jobs: list[dict], where: str, cluster, serial, progress):
     from tqdm import tqdm
 
     bar = tqdm(total=len(jobs), desc="map", unit="point", disable=not progress,
@@ -71,7 +72,7 @@ def _compute(table, jobs: list[dict], where: str, spec: MapSpec, cluster, serial
     try:
         if serial:
             for i, raw in enumerate(jobs):
-                rows[i] = run_point(table, raw, where)
+                rows[i] = run_point(table, raw, where, fluid)
                 bar.update(1)
             return [rows[i] for i in range(len(jobs))], "one process"
         from .dask_cluster import local_workers, open_client
@@ -82,7 +83,8 @@ def _compute(table, jobs: list[dict], where: str, spec: MapSpec, cluster, serial
         try:
             # One copy of the table per worker, not one per point.
             shared = client.scatter(table, broadcast=True)
-            futures = {client.submit(run_point, shared, raw, where, pure=False): i
+            tab = None if fluid is None else client.scatter(fluid, broadcast=True)
+            futures = {client.submit(run_point, shared, raw, where, tab, pure=False): i
                        for i, raw in enumerate(jobs)}
             from dask.distributed import as_completed
 

@@ -1,0 +1,150 @@
+"""Quality of a 2D structured O-grid (:mod:`.ogrid`), measured by our own code.
+
+The measures follow OpenFOAM's definitions (``primitiveMeshTools``) on the grid's
+internal faces (edges, in 2D), so the figures can be set against checkMesh's on the
+one-cell-thick extrusion:
+
+* cell area by the shoelace formula, and the smallest corner area (the cross product of
+  the two edges at each corner): a corner at or below zero is an inverted or non-convex
+  quad, which a finite-volume solver cannot use;
+* non-orthogonality: the angle between an internal edge's normal and the line joining the
+  centroids of its two cells;
+* skewness: the distance from the edge's midpoint to where that centroid line crosses
+  the edge, over the centroid distance;
+* aspect ratio: a cell's longest edge over its shortest;
+* cells across the smallest gap: the rows a line from the inner wall to the outer one
+  crosses at the narrowest column (an O-grid's every column has ``cells_across`` rows;
+  the tests check this at the true contact points independently).
+
+:func:`check` turns a failure into one CaseError line naming the angle and the measure.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rotorflow.errors import CaseError
+
+
+@dataclass(frozen=True)
+class QualityLimits:
+    """What a grid must meet (OpenFOAM's checkMesh defaults where it has one)."""
+
+    #: checkMesh counts faces above 70 deg as severely non-orthogonal; the solvers still
+    #: run with non-orthogonal correctors up to about 85 deg, beyond which the correction
+    #: diverges: refuse there.
+    max_non_orthogonality_deg: float = 85.0
+    #: checkMesh's limit for internal faces ("maxInternalSkewness 4").
+    max_skewness: float = 4.0
+    #: In a 20 um gap spanned by 8 cells with ~1 mm columns the cells are ~400:1; that is
+    #: what gap meshes of the field carry (SCORG reports 100-1000).  Beyond 1e4 the
+    #: pressure equation's matrix loses diagonal dominance in double precision.
+    max_aspect_ratio: float = 1.0e4
+
+
+@dataclass(frozen=True)
+class GridQuality:
+    cells: int
+    min_area: float  # m2
+    min_corner_area: float  # m2, smallest corner cross product / 2
+    max_non_orthogonality_deg: float
+    mean_non_orthogonality_deg: float
+    max_skewness: float
+    max_aspect_ratio: float
+    cells_across_smallest_gap: int
+    smallest_gap: float  # m, shortest column (inner node to outer node)
+    total_area: float  # m2
+
+    def row(self) -> str:
+        return (f"cells {self.cells}, min area {self.min_area:.3g} m2, non-orth max "
+                f"{self.max_non_orthogonality_deg:.1f} deg (mean "
+                f"{self.mean_non_orthogonality_deg:.1f}), skewness {self.max_skewness:.3g}, "
+                f"aspect {self.max_aspect_ratio:.3g}, {self.cells_across_smallest_gap} cells "
+                f"across the smallest gap {self.smallest_gap * 1e6:.4g} um")
+
+
+def _cross(a, b):
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def cell_corners(points: np.ndarray) -> np.ndarray:
+    """(columns, rows, 4, 2) corners of each cell, counter-clockwise."""
+    nxt = np.roll(points, -1, axis=0)
+    # Column i runs counter-clockwise and row j outward, so (i, j), (i, j+1), (i+1, j+1),
+    # (i+1, j) is the counter-clockwise order.
+    return np.stack([points[:, :-1], points[:, 1:], nxt[:, 1:], nxt[:, :-1]], axis=2)
+
+
+def cell_areas_and_centroids(corners: np.ndarray):
+    x, y = corners[..., 0], corners[..., 1]
+    xn, yn = np.roll(x, -1, axis=-1), np.roll(y, -1, axis=-1)
+    c = x * yn - xn * y
+    area = 0.5 * c.sum(-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cx = ((x + xn) * c).sum(-1) / (6.0 * area)
+        cy = ((y + yn) * c).sum(-1) / (6.0 * area)
+    return area, np.stack([cx, cy], -1)
+
+
+def _face_measures(a, b, c_own, c_nei):
+    """Non-orthogonality [deg] and skewness of edges a-b between cells c_own, c_nei."""
+    e = b - a
+    n = np.stack([e[..., 1], -e[..., 0]], -1)
+    d = c_nei - c_own
+    cos = np.abs(np.sum(n * d, -1)) / (np.linalg.norm(n, axis=-1) * np.linalg.norm(d, axis=-1))
+    non_orth = np.degrees(np.arccos(np.clip(cos, 0.0, 1.0)))
+    mid = 0.5 * (a + b)
+    d_own = np.abs(np.sum(n * (mid - c_own), -1))
+    d_nei = np.abs(np.sum(n * (c_nei - mid), -1))
+    w = (d_own / (d_own + d_nei))[..., None]
+    hit = c_own + w * d
+    skew = np.linalg.norm(mid - hit, axis=-1) / np.linalg.norm(d, axis=-1)
+    return non_orth, skew
+
+
+def measure(grid) -> GridQuality:
+    p = grid.points
+    corners = cell_corners(p)
+    area, cen = cell_areas_and_centroids(corners)
+    corner_area = 0.5 * _cross(np.roll(corners, -1, axis=2) - corners,
+                               np.roll(corners, 1, axis=2) - corners)
+    # Internal edges along a row (between rows j and j+1) and along a column (between
+    # columns i and i+1, periodic).
+    nxt = np.roll(p, -1, axis=0)
+    no_r, sk_r = _face_measures(p[:, 1:-1], nxt[:, 1:-1], cen[:, :-1], cen[:, 1:])
+    no_c, sk_c = _face_measures(nxt[:, :-1], nxt[:, 1:], cen, np.roll(cen, -1, axis=0))
+    edges = np.linalg.norm(np.roll(corners, -1, axis=2) - corners, axis=-1)
+    gaps = np.linalg.norm(p[:, -1] - p[:, 0], axis=1)
+    non_orth = np.concatenate([no_r.ravel(), no_c.ravel()])
+    return GridQuality(
+        cells=int(area.size),
+        min_area=float(area.min()),
+        min_corner_area=float(corner_area.min()),
+        max_non_orthogonality_deg=float(np.nanmax(non_orth)) if non_orth.size else 0.0,
+        mean_non_orthogonality_deg=float(np.nanmean(non_orth)) if non_orth.size else 0.0,
+        max_skewness=float(np.nanmax(np.concatenate([sk_r.ravel(), sk_c.ravel()]))),
+        max_aspect_ratio=float(np.max(edges.max(-1) / edges.min(-1))),
+        cells_across_smallest_gap=int(p.shape[1] - 1),
+        smallest_gap=float(gaps.min()),
+        total_area=float(area.sum()),
+    )
+
+
+def check(q: GridQuality, phi: float, spec, limits: QualityLimits) -> None:
+    """CaseError (one line: the angle and the measure) for a grid that fails."""
+    at = f"O-grid at phi = {math.degrees(phi):.6g} deg"
+    if not q.min_corner_area > 0.0 or not q.min_area > 0.0:
+        raise CaseError(f"{at}: inverted cell (min area {q.min_area:.3g} m2, min corner "
+                        f"area {q.min_corner_area:.3g} m2)")
+    if q.cells_across_smallest_gap < spec.cells_across_gap:
+        raise CaseError(f"{at}: gap under-resolved ({q.cells_across_smallest_gap} cells "
+                        f"across, {spec.cells_across_gap} asked)")
+    for name, value, limit in (
+            ("non-orthogonality", q.max_non_orthogonality_deg, limits.max_non_orthogonality_deg),
+            ("skewness", q.max_skewness, limits.max_skewness),
+            ("aspect ratio", q.max_aspect_ratio, limits.max_aspect_ratio)):
+        if not value <= limit:
+            raise CaseError(f"{at}: {name} {value:.4g} above the limit {limit:.4g}")

@@ -23,8 +23,8 @@ Construction, at outer-rotor angle ``phi``:
   O1), the polar correspondence where they are far apart, blended smoothly; a few Jacobi
   sweeps slide the far outer nodes along the wall to even out their spacing (boundary
   nodes stay on the true curves; near a gap they are fixed).  A fold raises.
-* Each column's line is straight from wall to wall by default (``orthogonal_blend``
-  blends in the cubic Hermite curve square to both walls), its nodes clustered toward
+* Each column's line blends the straight chord with the cubic Hermite curve square to
+  both walls (``orthogonal_blend``, a quarter by default), its nodes clustered toward
   both walls by a two-sided tanh law (``wall_clustering``; 0 = uniform).  Interior nodes
   are not Laplace-smoothed: on a wall of 20 mm radius, averaging two neighbours 1 mm
   apart moves a node 25 um, more than the clearance, which would push the first row
@@ -74,11 +74,12 @@ class OGridSpec:
     columns: int = 2048
     cells_across_gap: int = 8  # cells from the inner wall to the outer (at every contact)
     wall_clustering: float = 2.0  # tanh stretching parameter; 0 = uniform across
-    #: 0 = straight connecting lines, 1 = Hermite lines square to both walls.  Straight by
-    #: default: over a lobe period at 1024 columns 0.5 lowers the mean non-orthogonality
-    #: only from 14.3 to 13.1 deg and its max not at all, and at 2048 columns it inverts
-    #: cells in the wide chambers where neighbouring normals fan across each other.
-    orthogonal_blend: float = 0.0
+    #: 0 = straight connecting lines, 1 = Hermite lines square to both walls.  A quarter:
+    #: over a lobe period (2048 columns, every 6 deg) straight lines leave checkMesh's
+    #: skewness at 5.7 (tall first cells leaning on the pin flanks), 0.25 brings it to
+    #: 3.7; 0.5 and more invert cells in the wide chambers, where neighbouring normals
+    #: fan across each other.
+    orthogonal_blend: float = 0.25
     smoothing_sweeps: int = 4
     #: Wall distance, as a fraction of the rotor diameter, over which the column lines turn
     #: from the polar correspondence to the inner nodes' foot points on the outer wall.
@@ -356,6 +357,9 @@ class OGrid:
 
     phi: float
     points: np.ndarray  # (columns, cells_across + 1, 2) [m]
+    #: (columns, 2): how far the true inner and outer walls depart from the grid's wall
+    #: chord from column i to i + 1, at the chord's middle parameter [m].
+    wall_sag: np.ndarray | None = None
 
     @property
     def columns(self) -> int:
@@ -392,7 +396,19 @@ def build_ogrid(pair, phi: float, gap: float, spec: OGridSpec = OGridSpec()) -> 
     n_in = _smooth_directions(n_in, spec.smoothing_sweeps, spec.smoothing_relax)
     n_out = _smooth_directions(n_out, spec.smoothing_sweeps, spec.smoothing_relax)
     x = _connect(p_in, n_in, p_out, n_out, s, spec.orthogonal_blend)
-    return OGrid(phi, x)
+    sag = np.stack([_chord_sag(inner_wall, u_in, inner_wall.curve.n),
+                    _chord_sag(outer_wall, u_out, outer_wall.curve.n)], 1)
+    return OGrid(phi, x, sag)
+
+
+def _chord_sag(wall: Wall, u: np.ndarray, n: int) -> np.ndarray:
+    """Distance of the true wall from each chord between neighbouring nodes, at the
+    middle parameter (the nodes' parameters increase, the last chord across the seam)."""
+    u_next = np.append(u[1:], u[0] + n)
+    a, b = wall.point(u), wall.point(u_next)
+    q = wall.point(0.5 * (u + u_next))
+    e = b - a
+    return np.abs(e[:, 0] * (q - a)[:, 1] - e[:, 1] * (q - a)[:, 0]) / np.linalg.norm(e, axis=1)
 
 
 def make_ogrid(pair, phi: float, gap: float, spec: OGridSpec = OGridSpec(), limits=None):

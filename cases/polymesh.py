@@ -105,7 +105,8 @@ def build_polymesh(sections: list, z: np.ndarray):
     own, nei = np.minimum(a, b), np.maximum(a, b)
     order = np.lexsort((nei, own))
     own, nei, f = own[order], nei[order], f[order]
-    centres = _cell_centres(pts, node, I, J, K)
+    centres = np.empty((len(I), 3))
+    centres[cell(I, J, K)] = _cell_centres(pts, node, I, J, K)
     f = _orient(pts, f, centres[nei] - centres[own])
     faces, owner, patches = [f], [own], []
     start = len(f)

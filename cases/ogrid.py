@@ -45,6 +45,8 @@ from rotorflow.errors import CaseError
 from rotorflow.geometry.curves import Clearance, offset_profile
 from rotorflow.geometry.planar import TWO_PI, rotate
 
+from .ogrid_quality import QualityLimits, check, chord_sag, measure
+
 #: Wall samples per profile piece used to tabulate polar angle and arc length; nodes are
 #: then bisected onto the true curve, so this only has to bracket them (and resolve the
 #: arc length to far below a column's share: 4096 samples per piece).
@@ -396,26 +398,14 @@ def build_ogrid(pair, phi: float, gap: float, spec: OGridSpec = OGridSpec()) -> 
     n_in = _smooth_directions(n_in, spec.smoothing_sweeps, spec.smoothing_relax)
     n_out = _smooth_directions(n_out, spec.smoothing_sweeps, spec.smoothing_relax)
     x = _connect(p_in, n_in, p_out, n_out, s, spec.orthogonal_blend)
-    sag = np.stack([_chord_sag(inner_wall, u_in, inner_wall.curve.n),
-                    _chord_sag(outer_wall, u_out, outer_wall.curve.n)], 1)
+    sag = np.stack([chord_sag(inner_wall, u_in, inner_wall.curve.n),
+                    chord_sag(outer_wall, u_out, outer_wall.curve.n)], 1)
     return OGrid(phi, x, sag)
-
-
-def _chord_sag(wall: Wall, u: np.ndarray, n: int) -> np.ndarray:
-    """Distance of the true wall from each chord between neighbouring nodes, at the
-    middle parameter (the nodes' parameters increase, the last chord across the seam)."""
-    u_next = np.append(u[1:], u[0] + n)
-    a, b = wall.point(u), wall.point(u_next)
-    q = wall.point(0.5 * (u + u_next))
-    e = b - a
-    return np.abs(e[:, 0] * (q - a)[:, 1] - e[:, 1] * (q - a)[:, 0]) / np.linalg.norm(e, axis=1)
 
 
 def make_ogrid(pair, phi: float, gap: float, spec: OGridSpec = OGridSpec(), limits=None):
     """(grid, quality): the O-grid, checked by :func:`.ogrid_quality.check` (CaseError
     naming the angle and the failed measure)."""
-    from .ogrid_quality import QualityLimits, check, measure
-
     grid = build_ogrid(pair, phi, gap, spec)
     quality = measure(grid)
     check(quality, phi, spec, limits or QualityLimits())

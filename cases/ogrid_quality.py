@@ -79,6 +79,16 @@ class GridQuality:
                 f"across the smallest gap {self.smallest_gap * 1e6:.4g} um")
 
 
+def chord_sag(wall, u: np.ndarray, n: int) -> np.ndarray:
+    """Distance of the true wall from each chord between neighbouring nodes, at the
+    middle parameter (the nodes' parameters increase, the last chord across the seam)."""
+    u_next = np.append(u[1:], u[0] + n)
+    a, b = wall.point(u), wall.point(u_next)
+    q = wall.point(0.5 * (u + u_next))
+    e = b - a
+    return np.abs(e[:, 0] * (q - a)[:, 1] - e[:, 1] * (q - a)[:, 0]) / np.linalg.norm(e, axis=1)
+
+
 def _cross(a, b):
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 

@@ -59,20 +59,22 @@ def test_area_converges_at_second_order():
     from the closed forms (not from any sampling)."""
     exact = _exact_area()
     errors = []
-    for columns in (256, 512, 1024):
+    columns = np.array([256, 512, 1024, 2048])
+    for n in columns:
         # The plain arc-length law: the clustering shares refine the walls' sharpest
         # bends first, where the signed errors of the two walls cancel and the order
         # of |error| comes out erratic (2.8 to 4.6), which says nothing about the sag.
-        spec = OGridSpec(columns=columns, gap_clustering=0.0, turn_clustering=0.0)
+        spec = OGridSpec(columns=int(n), gap_clustering=0.0, turn_clustering=0.0)
         q = measure(build_ogrid(PAIR, math.radians(13.0), GAP, spec))
         errors.append(abs(q.total_area - exact) / exact)
-    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
-    # Chord sag: order 2.  Within 0.3: the smoothing sweeps are a fixed number, so their
-    # reach in columns, and with it the node law, changes a little between grids
-    # (measured 2.23 and 2.19 for 256-512-1024).
-    assert np.all(np.abs(orders - 2.0) < 0.3), (errors, orders)
-    # 1024 columns: sag ~ h^2 / (8 R) over the perimeter, h ~ 0.25 mm, R ~ 10 mm.
-    assert errors[-1] < 1e-4, errors
+    # Chord sag: order 2, fitted over the four grids.  Successive pairs scatter (1.7 to
+    # 2.4 at 13, 29 and 47 deg): the smoothing sweeps are a fixed number, so their reach
+    # in columns, and with it the node law, changes a little between grids; the fit
+    # measured 2.19 (13 deg), 2.08 (29), 2.07 (47).
+    order = -np.polyfit(np.log(columns), np.log(errors), 1)[0]
+    assert abs(order - 2.0) < 0.25, (errors, order)
+    # 2048 columns: sag ~ h^2 / (8 R) over the perimeter, h ~ 0.12 mm, R ~ 10 mm.
+    assert errors[-1] < 2e-5, errors
 
 
 def _containing_rows(points: np.ndarray, x: np.ndarray) -> set[int]:

@@ -1,0 +1,183 @@
+"""An OpenFOAM polyMesh from stacked structured O-grid sections (:mod:`.ogrid`).
+
+Layer k of the mesh holds the section grid at height ``z[k]``; node (i, j) of layer k
+joins node (i, j) of layer k + 1, which the O-grid's fixed numbering makes possible.
+One cell thick with ``empty`` ends it is a 2D mesh; stacked by the sweep law
+(:func:`helical_stack`: the section at z is the planar pair at outer angle
+``phi - twist(z)``, :mod:`..geometry.sweep`) it follows the helical chambers.
+
+Written directly (points, faces, owner, neighbour, boundary, ASCII): internal faces in
+upper-triangular order (by owner, then neighbour), each oriented from its owner to its
+neighbour, boundary faces outward.  Patches: ``innerRotor`` and ``outerRotor`` (walls),
+``ends`` (the two end planes, ``empty`` for one layer, ``wall`` otherwise).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from rotorflow.errors import CaseError
+
+HEADER = """FoamFile
+{{
+    version     2.0;
+    format      ascii;
+    class       {cls};
+    location    "constant/polyMesh";
+    object      {obj};
+}}
+"""
+
+
+def helical_stack(pair, phi: float, gap: float, sweep, layers: int, spec=None):
+    """(sections, z): the O-grid at each of ``layers + 1`` heights of a straight or
+    helical sweep."""
+    from .ogrid import OGridSpec, make_ogrid
+
+    if sweep.kind == "conical":
+        raise CaseError("stacking O-grids of a conical sweep is not implemented")
+    if layers < 1:
+        raise CaseError(f"layers must be at least 1, got {layers}")
+    z = np.linspace(0.0, sweep.length, layers + 1)
+    sections = [make_ogrid(pair, phi - float(sweep.twist(zk)), gap, spec or OGridSpec())[0]
+                for zk in z]
+    return sections, z
+
+
+def _hexes(columns: int, rows: int, layers: int):
+    """Node index of (i, j, k) and cell index of (i, j, k) as functions."""
+    per_layer = columns * (rows + 1)
+
+    def node(i, j, k):
+        return k * per_layer + (i % columns) * (rows + 1) + j
+
+    def cell(i, j, k):
+        return k * columns * rows + i * rows + j
+
+    return node, cell
+
+
+def _quad(node, i, j, k, kind):
+    """The four nodes of a face of hex (i, j, k): 'j+' (toward the outer wall), 'i+'
+    (toward the next column), 'k+' (toward the next layer), and the 'j-'/'k-' faces."""
+    if kind == "j+":
+        return [node(i, j + 1, k), node(i + 1, j + 1, k), node(i + 1, j + 1, k + 1),
+                node(i, j + 1, k + 1)]
+    if kind == "j-":
+        return [node(i, j, k), node(i + 1, j, k), node(i + 1, j, k + 1), node(i, j, k + 1)]
+    if kind == "i+":
+        return [node(i + 1, j, k), node(i + 1, j + 1, k), node(i + 1, j + 1, k + 1),
+                node(i + 1, j, k + 1)]
+    if kind == "k+":
+        return [node(i, j, k + 1), node(i + 1, j, k + 1), node(i + 1, j + 1, k + 1),
+                node(i, j + 1, k + 1)]
+    return [node(i, j, k), node(i + 1, j, k), node(i + 1, j + 1, k), node(i, j + 1, k)]
+
+
+def build_polymesh(sections: list, z: np.ndarray):
+    """(points, faces, owner, neighbour, patches) of the stacked sections; ``patches`` is
+    [(name, type, start, count)]."""
+    columns, rows = sections[0].columns, sections[0].cells_across
+    layers = len(sections) - 1
+    for s in sections:
+        if s.points.shape != sections[0].points.shape:
+            raise CaseError("stacked O-grid sections differ in node count")
+    pts = np.concatenate([np.column_stack([s.points.reshape(-1, 2), np.full(
+        columns * (rows + 1), zk)]) for s, zk in zip(sections, z, strict=True)])
+    node, cell = _hexes(columns, rows, layers)
+    I, J, K = np.meshgrid(np.arange(columns), np.arange(rows), np.arange(layers), indexing="ij")
+    I, J, K = I.ravel(), J.ravel(), K.ravel()
+    internal = []
+    m = J < rows - 1
+    internal.append((cell(I[m], J[m], K[m]), cell(I[m], J[m] + 1, K[m]),
+                     _quad(node, I[m], J[m], K[m], "j+")))
+    nxt = (I + 1) % columns
+    internal.append((cell(I, J, K), cell(nxt, J, K), _quad(node, I, J, K, "i+")))
+    m = K < layers - 1
+    internal.append((cell(I[m], J[m], K[m]), cell(I[m], J[m], K[m] + 1),
+                     _quad(node, I[m], J[m], K[m], "k+")))
+    a = np.concatenate([x[0] for x in internal])
+    b = np.concatenate([x[1] for x in internal])
+    f = np.concatenate([np.stack(x[2], 1) for x in internal])
+    own, nei = np.minimum(a, b), np.maximum(a, b)
+    order = np.lexsort((nei, own))
+    own, nei, f = own[order], nei[order], f[order]
+    centres = np.empty((len(I), 3))
+    centres[cell(I, J, K)] = _cell_centres(pts, node, I, J, K)
+    f = _orient(pts, f, centres[nei] - centres[own])
+    faces, owner, patches = [f], [own], []
+    start = len(f)
+    end_type = "empty" if layers == 1 else "wall"
+    for name, typ, sel, kind in (
+            ("innerRotor", "wall", J == 0, "j-"),
+            ("outerRotor", "wall", J == rows - 1, "j+"),
+            ("ends", end_type, K == 0, "k-"),
+            ("ends", end_type, K == layers - 1, "k+")):
+        bf = np.stack(_quad(node, I[sel], J[sel], K[sel], kind), 1)
+        bo = cell(I[sel], J[sel], K[sel])
+        bf = _orient(pts, bf, pts[bf].mean(1) - centres[bo])
+        faces.append(bf)
+        owner.append(bo)
+        if patches and patches[-1][0] == name:
+            patches[-1] = (name, typ, patches[-1][2], patches[-1][3] + len(bf))
+        else:
+            patches.append((name, typ, start, len(bf)))
+        start += len(bf)
+    return pts, np.concatenate(faces), np.concatenate(owner), nei, patches
+
+
+def _cell_centres(pts, node, I, J, K):
+    corners = [node(I + di, J + dj, K + dk) for di in (0, 1) for dj in (0, 1) for dk in (0, 1)]
+    return np.mean([pts[c] for c in corners], axis=0)
+
+
+def _orient(pts, faces, direction):
+    """Reverse the faces whose normal (by their node order) points against
+    ``direction``."""
+    p = pts[faces]
+    n = np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])
+    flip = np.sum(n * direction, 1) < 0.0
+    faces = faces.copy()
+    faces[flip] = faces[flip][:, ::-1]
+    return faces
+
+
+def write_polymesh(case_dir: Path, sections: list, z: np.ndarray) -> dict:
+    """Write ``constant/polyMesh`` of the stacked sections; returns its counts."""
+    pts, faces, owner, nei, patches = build_polymesh(sections, z)
+    d = Path(case_dir) / "constant" / "polyMesh"
+    d.mkdir(parents=True, exist_ok=True)
+    n_cells = int(owner.max()) + 1
+
+    def write(obj, cls, lines, count):
+        with open(d / obj, "w") as fh:
+            fh.write(HEADER.format(cls=cls, obj=obj))
+            fh.write(f"\n{count}\n(\n")
+            fh.write("\n".join(lines))
+            fh.write("\n)\n")
+
+    write("points", "vectorField", (f"({x:.17g} {y:.17g} {zz:.17g})" for x, y, zz in pts),
+          len(pts))
+    write("faces", "faceList", (f"4({a} {b} {c} {e})" for a, b, c, e in faces), len(faces))
+    write("owner", "labelList", map(str, owner), len(owner))
+    write("neighbour", "labelList", map(str, nei), len(nei))
+    entries = []
+    for name, typ, start, count in patches:
+        group = "\n        inGroups    List<word> 1(wall);" if typ == "wall" else ""
+        entries.append(f"    {name}\n    {{\n        type        {typ};{group}\n"
+                       f"        nFaces      {count};\n        startFace   {start};\n    }}")
+    with open(d / "boundary", "w") as fh:
+        fh.write(HEADER.format(cls="polyBoundaryMesh", obj="boundary"))
+        fh.write(f"\n{len(patches)}\n(\n" + "\n".join(entries) + "\n)\n")
+    return {"points": len(pts), "faces": len(faces), "cells": n_cells,
+            "internal_faces": len(nei)}
+
+
+def section_thickness(grid) -> float:
+    """A one-layer thickness for a 2D mesh: the mean column spacing (cells near cubic in
+    the chambers; the value does not enter a 2D solution)."""
+    p = grid.points[:, -1]
+    return float(np.mean(np.linalg.norm(np.roll(p, -1, 0) - p, axis=1))) or math.nan

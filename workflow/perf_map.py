@@ -134,9 +134,9 @@ def shared_fluid(table, raw: dict, spec: MapSpec, where: str):
     corners' ranges), or None for the gas models (air's table is shared per process
     already). Building a table takes ~1 s; a 10 x 10 map would build 100."""
     from rotorflow.quasi1d import case_settings
-    from rotorflow.quasi1d.simulate import chamber_of
     from rotorflow.quasi1d.coolprop_fluid import TabulatedFluid
     from rotorflow.quasi1d.coolprop_table import reachable_box
+    from rotorflow.quasi1d.simulate import chamber_of
 
     if not str(raw["operating"].get("fluid", "")).startswith("CoolProp::"):
         return None

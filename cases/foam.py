@@ -256,7 +256,9 @@ class Step:
     ``then(case_dir, log_path)`` runs once the program succeeded: it reads or edits what
     the program wrote (sets the patch types gmshToFoam left untyped, judges checkMesh's
     report) and raises if that is wrong; what it returns is the step's value.
-    ``timeout_s``, ``on_time`` and ``on_poll`` are :func:`run`'s.
+    ``timeout_s``, ``on_time`` and ``on_poll`` are :func:`run`'s; ``log_name`` names the
+    log (``log.<log_name>``) and the step's value where the program is a launcher (mpirun
+    runs the solver: its log is still the solver's).
     """
 
     argv: tuple[str, ...]
@@ -264,6 +266,7 @@ class Step:
     timeout_s: float | None = None
     on_time: Callable[[float], None] | None = field(default=None, compare=False)
     on_poll: Callable[[], None] | None = field(default=None, compare=False)
+    log_name: str | None = None
 
     def __post_init__(self) -> None:
         if not self.argv or not all(isinstance(a, str) for a in self.argv):
@@ -273,20 +276,26 @@ class Step:
     def program(self) -> str:
         return self.argv[0]
 
+    @property
+    def name(self) -> str:
+        """What the step's log and value are named by: ``log_name``, else the program."""
+        return self.log_name or self.program
+
 
 def drain(steps: Iterable[Step], case_dir: Path, *, launch: Launch | None = None
           ) -> dict[str, Any]:
-    """Run ``steps`` in order in ``case_dir``, each with its log ``log.<program>``.
+    """Run ``steps`` in order in ``case_dir``, each with its log ``log.<name>``.
 
     The first program that fails (or whose ``then`` raises) stops the drain: its error,
-    with the tail of its log, is raised and no later step runs.  Returns each program's
-    value (what its ``then`` returned, else its log path) by program name.
+    with the tail of its log, is raised and no later step runs.  Returns each step's
+    value (what its ``then`` returned, else its log path) by :attr:`Step.name`.
     """
     values: dict[str, Any] = {}
     for step in steps:
-        log_path = run(case_dir, step.program, step.argv[1:], timeout_s=step.timeout_s,
-                       on_time=step.on_time, on_poll=step.on_poll, launch=launch)
-        values[step.program] = log_path if step.then is None else step.then(case_dir, log_path)
+        log_path = run(case_dir, step.program, step.argv[1:], log_name=step.log_name,
+                       timeout_s=step.timeout_s, on_time=step.on_time, on_poll=step.on_poll,
+                       launch=launch)
+        values[step.name] = log_path if step.then is None else step.then(case_dir, log_path)
     return values
 
 

@@ -55,15 +55,18 @@ class Plan:
     """The OpenFOAM commands of a case, in order.
 
     ``setup``: mesh conversion and checks (a failure stops the case with an error);
-    ``solve``: the solver (a failure is the run's result, kept with its log tail).
+    ``solve``: the solver (a failure is the run's result, kept with its log tail);
+    ``post``: what turns the solver's output into the case's (reconstructPar after a
+    parallel run); run only after the solver finished, a failure is the run's too.
     """
 
     setup: tuple[Step, ...]
     solve: Step
+    post: tuple[Step, ...] = ()
 
     @property
     def steps(self) -> tuple[Step, ...]:
-        return (*self.setup, self.solve)
+        return (*self.setup, self.solve, *self.post)
 
     def commands(self) -> list[list[str]]:
         """The argument lists, in the order they run."""
@@ -129,7 +132,7 @@ def run_case(
     start = time.monotonic()
     failure = ""
     try:
-        foam.drain([plan.solve], tmp, launch=launch)
+        foam.drain([plan.solve, *plan.post], tmp, launch=launch)
     except ExternalRunError as exc:
         failure = str(exc)
     result = judge(tmp, context, values, time.monotonic() - start, failure)

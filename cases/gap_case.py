@@ -54,6 +54,7 @@ from .gap_setup import (
     write_files,
 )
 from .gap_walls import GapWalls
+from .parallel import SERIAL, Decomposition, parallel_plan
 
 #: Version of the case this module writes: bump it when dictionaries or judgement change,
 #: so that stored results of older cases are recomputed rather than reused.
@@ -206,9 +207,11 @@ def plan(case: GapCase, case_dir: Path, mesh_cells: int | None = None,
     )
 
 
-def _build(case: GapCase, progress, case_dir: Path) -> tuple[Plan, _Built]:
+def _build(case: GapCase, progress, dec: Decomposition, case_dir: Path
+           ) -> tuple[Plan, _Built]:
     turbulence, mesh = write_files(case, case_dir)
-    return plan(case, case_dir, mesh.cells, progress), _Built(turbulence, mesh.depth_m)
+    return (parallel_plan(plan(case, case_dir, mesh.cells, progress), case_dir, dec),
+            _Built(turbulence, mesh.depth_m))
 
 
 def write_case(case: GapCase, case_dir: Path) -> tuple[str, MeshQuality, float]:
@@ -218,7 +221,7 @@ def write_case(case: GapCase, case_dir: Path) -> tuple[str, MeshQuality, float]:
     Returns the turbulence model chosen, checkMesh's verdict and the mesh depth.
     """
     case_dir = Path(case_dir)
-    the_plan, built = _build(case, None, case_dir)
+    the_plan, built = _build(case, None, SERIAL, case_dir)
     values = foam.drain(the_plan.setup, case_dir)
     return built.turbulence, values["checkMesh"], built.depth_m
 
@@ -229,6 +232,7 @@ def run_gap_case(
     *,
     progress: Callable[[float], None] | None = None,
     reuse: bool = True,
+    decomposition: Decomposition = SERIAL,
 ) -> GapResult:
     """Build and run one gap case in ``case_dir``; return (and store) its result.
 
@@ -238,7 +242,8 @@ def run_gap_case(
     results included: they are kept, never retried silently).  ``progress`` receives the
     fraction of ``max_iterations`` done (the run usually stops well before, once
     converged).  Mesh problems raise (CaseError, MeshCheckError); solver failures return
-    a failed result.
+    a failed result.  ``decomposition``: run the solver on that many processes
+    (:mod:`.parallel`; the case and its key are the same as the serial run's).
     """
     def judged(folder: Path, built: _Built, values: Mapping[str, Any], elapsed: float,
                failure: str) -> GapResult:
@@ -246,7 +251,7 @@ def run_gap_case(
                      elapsed, failure)
 
     return foam_case.run_case(
-        case_dir, case.key(), functools.partial(_build, case, progress), judged,
+        case_dir, case.key(), functools.partial(_build, case, progress, decomposition), judged,
         GapResult.from_json, reuse=reuse, label="gap case",
         summary=lambda r: (f"{r.status}, {r.mass_flow_kg_s_m:.4g} kg/s/m, imbalance "
                            f"{r.imbalance:.2e}, {r.iterations} iterations, "

@@ -1,0 +1,286 @@
+"""A steady 3D run of the whole internal-gear machine at a frozen rotor angle (issue 16).
+
+The working domain is the stacked structured grid (:mod:`.ogrid`, :mod:`.polymesh`) of
+the machine at outer-rotor angle ``phi``; its end faces inside the ports
+(:func:`..geometry.ports.ports`) become the ``suction`` and ``discharge`` patches (fixed
+static pressures of the plenums, the gas entering at the plenum's temperature), the rest
+of the end plates are static walls, and each rotor's wall turns about its own axis at its
+own speed (stock ``rotatingWallVelocity``, which keeps the tangential part of omega x r:
+the rotors are frozen, their surfaces slide).  rhoSimpleFoam, laminar: at the clearances
+of these machines (20-100 um) the gap Reynolds number is far below transition
+(:mod:`.gap_setup`'s criterion), and the chambers, closed or open to a large port, hold
+slow flow.
+
+What it reports (``postProcessing``, read by :func:`read_outputs`): the net flow through
+each port, through each sealing faceZone between two chambers (:mod:`.machine_zones`),
+and each chamber's volume-averaged pressure, by slot (machine age ``phi + s * period``);
+the mass balance is the ports' net flow over the larger port flow (walls carry none).
+
+The cells start at the pressure the product's quasi-1D model gives each chamber at the
+same frozen angle (:mod:`rotorflow.quasi1d.frozen`) where the caller passes it, else
+at the mean of the plenums.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rotorflow.errors import CaseError
+from rotorflow.postprocess.foam_output import function_object_table
+from rotorflow.quasi1d.perfect_gas import PerfectGas
+
+from .foam import Step
+from .foam_case import Plan
+from .foam_dicts import (
+    control_dict,
+    field_value,
+    fv_schemes,
+    inlet_outlet,
+    thermophysical_properties,
+    turbulence_properties,
+)
+from .foam_files import write_dict, write_field
+from .foam_mesh import judge_check_mesh
+from .machine_files import (
+    check_internal_faces,
+    write_cell_zones,
+    write_create_patch,
+    write_face_set,
+    write_face_zones,
+)
+from .machine_zones import chamber_zones, port_faces, seal_faces
+from .polymesh import build_polymesh, helical_stack, write_polymesh
+
+SOLVER = "rhoSimpleFoam"
+#: Function objects write every this many iterations (tables stay small on long runs).
+OUTPUT_EVERY = 10
+PORTS = ("suction", "discharge")
+#: Bound on |U| while the start settles (m/s): above the choked speed of air at the
+#: temperatures reached (~400 m/s at 400 K), so a settled flow never meets it.
+VELOCITY_LIMIT = 600.0
+
+
+def slot_name(s: int) -> str:
+    return f"chamber{s}" if s >= 0 else f"chamber_m{-s}"
+
+
+def seal_name(a: int, b: int) -> str:
+    return f"seal_{slot_name(a)}_{slot_name(b)}"
+
+
+@dataclass(frozen=True)
+class FrozenMachine:
+    """The machine at one angle with its plenums (SI)."""
+
+    pair: Any
+    sweep: Any
+    phi: float  # outer-rotor (machine) angle, rad
+    gap: float  # clearance, m
+    layers: int
+    spec: Any  # cases.ogrid.OGridSpec
+    ports: tuple  # (suction, discharge) regions: lists of polygons in the end planes
+    p_suction: float
+    p_discharge: float
+    T_suction: float
+    T_discharge: float
+    omega_outer: float  # rad/s, counter-clockwise positive
+    gas: PerfectGas = field(default_factory=PerfectGas)
+    iterations: int = 1500
+    initial_p: dict | None = None  # slot -> Pa (the frozen quasi-1D state)
+
+    def rotor_speeds(self) -> list[tuple[str, tuple[float, float], float]]:
+        """(patch, axis point, omega) per rotor: the outer rotor about O1, the inner
+        about its own axis, each at its speed ratio."""
+        out = []
+        for patch, rotor in zip(("outerRotor", "innerRotor"), self.pair.rotors, strict=True):
+            out.append((patch, tuple(float(c) for c in rotor.axis),
+                        float(rotor.speed_ratio) * self.omega_outer))
+        return out
+
+
+@dataclass(frozen=True)
+class Built:
+    """What the judge needs of the written case."""
+
+    cells: int
+    slots: tuple
+    ages: dict
+    seals: tuple  # (a, b) slot pairs with a sealing zone
+    chamber_volume: dict  # slot -> m3 (sum of its cells' volumes, by the mesh's own measure)
+
+
+def write_case(m: FrozenMachine, case_dir: Path) -> tuple[Plan, Built]:
+    """Write the case into ``case_dir``: mesh, port face sets, dictionaries, fields;
+    return its plan (createPatch, zones, checkMesh; the solver) and what the judge needs."""
+    case_dir = Path(case_dir)
+    sections, z = helical_stack(m.pair, m.phi, m.gap, m.sweep, m.layers, m.spec)
+    zones = chamber_zones(m.pair, sections, z, m.phi, m.sweep)
+    pts, faces, owner, nei, patches = build_polymesh(sections, z)
+    write_polymesh(case_dir, sections, z)
+    _, _, start, count = next(p for p in patches if p[0] == "ends")
+    half = count // 2  # z = 0 faces first, then z = L (polymesh)
+    sets = {}
+    for k, (name, region) in enumerate(zip(PORTS, m.ports, strict=True)):
+        found = port_faces(pts, faces, start + k * half, half, region)
+        if not found.size:
+            raise CaseError(f"no end face of the grid lies in the {name} port at "
+                            f"phi = {math.degrees(m.phi):.6g} deg")
+        write_face_set(case_dir, f"{name}Faces", found)
+        sets[name] = f"{name}Faces"
+    write_create_patch(case_dir, sets)
+    seals = seal_faces(zones, owner, nei)
+    cell_zones = {slot_name(s): zones.cells_of(s) for s in zones.slots}
+    face_zones = {seal_name(a, b): v for (a, b), v in seals.items()}
+    _write_dicts(m, case_dir, list(cell_zones), list(face_zones))
+    _write_fields(m, case_dir, zones)
+
+    def zones_then(folder: Path, _log: Path) -> None:
+        check_internal_faces(folder, owner, nei)
+        write_cell_zones(folder, cell_zones)
+        write_face_zones(folder, face_zones)
+
+    vol = _cell_volumes(sections, z)
+    plan = Plan(
+        setup=(Step(("createPatch", "-overwrite"), then=zones_then),
+               Step(("checkMesh",), then=functools.partial(judge_check_mesh,
+                                                           expected_cells=len(vol)))),
+        solve=Step((SOLVER,)),
+    )
+    built = Built(len(vol), zones.slots, dict(zones.ages), tuple(seals),
+                  {s: float(vol[zones.cell_slot == s].sum()) for s in zones.slots})
+    return plan, built
+
+
+def _cell_volumes(sections, z) -> np.ndarray:
+    """Cell volumes in polymesh order: the mean of the two sections' quad areas times the
+    layer height (the trapezoidal rule along z)."""
+    def quad_area(p):
+        a, b = p[:, :-1], np.roll(p, -1, 0)[:, :-1]
+        c, d = np.roll(p, -1, 0)[:, 1:], p[:, 1:]
+        return np.abs(0.5 * ((c - a)[..., 0] * (d - b)[..., 1]
+                             - (c - a)[..., 1] * (d - b)[..., 0]))
+
+    return np.concatenate([(0.5 * (quad_area(sections[k].points)
+                                   + quad_area(sections[k + 1].points))
+                            * (z[k + 1] - z[k])).ravel() for k in range(len(sections) - 1)])
+
+
+def _write_dicts(m: FrozenMachine, case_dir: Path, chambers: list, seals: list) -> None:
+    def fo(kind, region, op, fields, name):
+        return field_value(kind, region, op, fields, write_control="timeStep",
+                           write_interval=OUTPUT_EVERY, name=name)
+
+    functions = {f"flow_{p}": fo("surfaceFieldValue", "patch", "sum", ["phi"], p)
+                 for p in PORTS}
+    functions |= {f"flow_{s}": fo("surfaceFieldValue", "faceZone", "sum", ["phi"], s)
+                  for s in seals}
+    functions |= {f"p_{c}": fo("volFieldValue", "cellZone", "volAverage", ["p"], c)
+                  for c in chambers}
+    system, constant = case_dir / "system", case_dir / "constant"
+    write_dict(system / "controlDict", control_dict(
+        SOLVER, start_from="latestTime", end_time=m.iterations, delta_t=1,
+        write_control="timeStep", write_interval=m.iterations, purge_write=1,
+        time_precision=8, run_time_modifiable=True, functions=functions))
+    bounded = ("bounded", "Gauss", "linearUpwind", "limited")
+    schemes = fv_schemes("steadyState", {
+        "div(phi,U)": bounded, "div(phi,e)": bounded,
+        "div(phi,K)": ("bounded", "Gauss", "linear"),
+        "div(phi,Ekp)": ("bounded", "Gauss", "linear"),
+        "div(phid,p)": ("Gauss", "upwind")})
+    # the stacked helical grid is non-orthogonal (checkMesh up to ~80 deg near the
+    # sealing lines): limit the correction there and correct twice per iteration
+    schemes["laplacianSchemes"] = {"default": ("Gauss", "linear", "limited", 0.5)}
+    schemes["snGradSchemes"] = {"default": ("limited", 0.5)}
+    write_dict(system / "fvSchemes", schemes)
+    write_dict(system / "fvSolution", {
+        "solvers": {
+            "p": {"solver": "GAMG", "smoother": "GaussSeidel", "tolerance": 1e-12,
+                  "relTol": 0.01, "maxIter": 100},
+            '"(U|e)"': {"solver": "smoothSolver", "smoother": "symGaussSeidel",
+                        "tolerance": 1e-14, "relTol": 0.1, "maxIter": 100},
+        },
+        "SIMPLE": {"nNonOrthogonalCorrectors": 2, "consistent": False, "transonic": False,
+                   "pMinFactor": 0.5, "pMaxFactor": 2.0},
+        "relaxationFactors": {"fields": {"p": 0.3, "rho": 0.05},
+                              "equations": {"U": 0.5, "e": 0.5}},
+    })
+    # The chambers start at different pressures across gaps a few cells wide: the first
+    # iterations accelerate the gap cells violently.  Stock fvOptions bound T and |U|
+    # there (inactive once the solution settles; the judge checks they no longer act).
+    T_lo, T_hi = 0.5 * m.T_suction, 2.0 * m.T_discharge
+    write_dict(system / "fvOptions", {
+        "limitT": {"type": "limitTemperature", "active": True, "selectionMode": "all",
+                   "min": T_lo, "max": T_hi},
+        "limitU": {"type": "limitVelocity", "active": True, "selectionMode": "all",
+                   "max": VELOCITY_LIMIT},
+    })
+    write_dict(constant / "thermophysicalProperties", thermophysical_properties(m.gas))
+    write_dict(constant / "turbulenceProperties", turbulence_properties("laminar"))
+
+
+def _write_fields(m: FrozenMachine, case_dir: Path, zones) -> None:
+    zero = case_dir / "0"
+    p_mid = 0.5 * (m.p_suction + m.p_discharge)
+    p = np.full(zones.cell_slot.size, p_mid)
+    T = np.full(zones.cell_slot.size, 0.5 * (m.T_suction + m.T_discharge))
+    known = dict(m.initial_p or {})
+    for s in zones.slots:  # chambers the model does not hold: their nearest plenum's
+        if s not in known and known:
+            known[s] = m.p_suction if s < min(known) else m.p_discharge
+    for s, ps in known.items():
+        p[zones.cell_slot == s] = ps
+        T[zones.cell_slot == s] = m.T_suction if ps <= m.p_suction else m.T_discharge
+    walls = {name: {"type": "zeroGradient"} for name in ("innerRotor", "outerRotor", "ends")}
+    write_field(zero / "p", (1, -1, -2), p, {
+        "suction": {"type": "fixedValue", "value": m.p_suction},
+        "discharge": {"type": "fixedValue", "value": m.p_discharge}, **walls})
+    write_field(zero / "T", (0, 0, 0, 1), T, {
+        "suction": inlet_outlet(m.T_suction), "discharge": inlet_outlet(m.T_discharge),
+        **walls})
+    zero_u = np.zeros(3)
+    u_walls = {name: {"type": "rotatingWallVelocity", "origin": [*axis, 0.0],
+                      "axis": [0.0, 0.0, 1.0], "omega": omega, "value": zero_u}
+               for name, axis, omega in m.rotor_speeds()}
+    write_field(zero / "U", (0, 1, -1), zero_u, vector=True, boundary={
+        "suction": {"type": "pressureInletOutletVelocity", "value": zero_u},
+        "discharge": {"type": "pressureInletOutletVelocity", "value": zero_u},
+        "ends": {"type": "noSlip"}, **u_walls})
+
+
+@dataclass(frozen=True)
+class MachineOutputs:
+    """Last values of the function objects: port flows (kg/s, positive out of the
+    domain), sealing flows (kg/s from the younger slot a into b), chamber pressures."""
+
+    iterations: int
+    ports: dict
+    seals: dict
+    chamber_p: dict
+    imbalance: float
+    drift: float  # largest relative change of a port flow over the last tenth of the run
+
+
+def read_outputs(case_dir: Path, built: Built) -> MachineOutputs:
+    def last(name, file_name):
+        _, t = function_object_table(case_dir, name, file_name)
+        return t
+
+    ports = {p: last(f"flow_{p}", "surfaceFieldValue.dat") for p in PORTS}
+    n = min(len(t) for t in ports.values())
+    tail = max(n // 10, 1)
+    drift = max(abs(t[-1, 1] - t[-1 - tail, 1]) / max(abs(t[-1, 1]), 1e-300)
+                if len(t) > tail else math.inf for t in ports.values())
+    flows = {p: float(t[-1, 1]) for p, t in ports.items()}
+    seals = {(a, b): float(last(f"flow_{seal_name(a, b)}", "surfaceFieldValue.dat")[-1, 1])
+             for a, b in built.seals}
+    chamber_p = {s: float(last(f"p_{slot_name(s)}", "volFieldValue.dat")[-1, 1])
+                 for s in built.slots}
+    big = max(abs(v) for v in flows.values())
+    return MachineOutputs(int(ports["suction"][-1, 0]), flows, seals, chamber_p,
+                          abs(sum(flows.values())) / big if big > 0 else math.inf, drift)

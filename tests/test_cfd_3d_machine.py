@@ -1,0 +1,109 @@
+"""A steady 3D run of the whole machine at a frozen angle (cases/machine_case.py, issue 16).
+
+The default pair as a straight 10 mm slab at 100 um clearance (512 columns x 4 rows x 4
+layers, 8,192 cells; checkMesh passes), its end faces cut into the ports of
+geometry.ports, both rotors' walls turning, rhoSimpleFoam for 1,000 iterations (~30 s on
+2 cores).  Checked against conservation and the second law, which the case writer does
+not compute: what enters by one port leaves by the other (the issue's 0.5 %), each
+closed chamber's sealing lines (faceZones cut from the grid by chamber) balance, and
+every line with a real pressure difference carries gas from the higher to the lower
+chamber.  The chambers start at the product's own frozen quasi-1D pressures.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rotorflow.cases import foam
+from rotorflow.cases.machine_case import FrozenMachine, read_outputs, write_case
+from rotorflow.cases.ogrid import OGridSpec
+from rotorflow.geometry.machine import SweptMachine
+from rotorflow.geometry.ports import port_timing, ports
+from rotorflow.geometry.summary import chamber_table
+from rotorflow.quasi1d.frozen import solve_frozen
+from rotorflow.quasi1d.simulate import build_model, case_settings
+from rotorflow.workflow.case import load_case
+
+pytestmark = [
+    pytest.mark.openfoam,
+    pytest.mark.skipif(not foam.is_available(),
+                       reason="OpenFOAM not installed: run `make openfoam`"),
+]
+
+DEFAULT = Path(__file__).resolve().parents[1] / "examples" / "default.toml"
+PHI = math.radians(13.0)
+
+
+def _slab_case(tmp_path: Path) -> Path:
+    text = DEFAULT.read_text()
+    for old, new in (("length_mm = 100", "length_mm = 10"),
+                     ('kind = "helical"', 'kind = "straight"'),
+                     ("wrap_outer_deg = 136", ""), ("gap_um = 20", "gap_um = 100")):
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "slab.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("machine3d")
+    path = _slab_case(tmp)
+    case = load_case(path)
+    op, leak, port_model, num, _ = case_settings(tomllib.loads(path.read_text()), "slab")
+    machine = SweptMachine(case.pair, case.sweep(None))
+    model = build_model(chamber_table(case, machine), op, leak, port_model, num)
+    frozen = solve_frozen(model, PHI)
+    period = float(case.pair.period)
+    initial = {round((a - PHI) / period): float(p) for a, p in zip(frozen.ages, frozen.p,
+                                                                    strict=True)}
+    suction, discharge = ports(machine, port_timing(machine, op.volume_ratio))
+    fm = FrozenMachine(case.pair, case.sweep(None), PHI, 100e-6, 4,
+                       OGridSpec(columns=512, cells_across_gap=4),
+                       (suction.to_polygons(), discharge.to_polygons()),
+                       op.p_suction_Pa, op.p_discharge_Pa, op.T_suction_K, float(model.dis.T),
+                       model.geo.omega_outer, iterations=1000, initial_p=initial)
+    folder = tmp / "case"
+    folder.mkdir()
+    plan, built = write_case(fm, folder)
+    values = foam.drain(plan.steps, folder)
+    return fm, built, values["checkMesh"], read_outputs(folder, built), frozen
+
+
+def test_mesh_passes_checkmesh_and_holds_every_chamber(run):
+    fm, built, quality, out, frozen = run
+    assert quality.ok and quality.cells == built.cells == 512 * 4 * 4
+    assert set(built.slots) >= {round((a - PHI) / fm.pair.period) for a in frozen.ages}
+
+
+def test_what_enters_by_one_port_leaves_by_the_other(run):
+    _, _, _, out, _ = run
+    assert out.ports["suction"] > 0.0 > out.ports["discharge"]  # outward-positive sums
+    assert out.imbalance < 5e-3  # the issue's 0.5 %; measured 1.8e-5
+    assert out.iterations == 1000
+
+
+def test_closed_chambers_balance_and_lines_flow_downhill(run):
+    fm, built, _, out, frozen = run
+    period = float(fm.pair.period)
+    closed = [round((a - PHI) / period) for a, c in zip(frozen.ages, frozen.closed,
+                                                        strict=True) if c]
+    assert closed
+    for s in closed:
+        inflow = sum(-f if a == s else f for (a, b), f in out.seals.items() if s in (a, b))
+        through = sum(abs(f) for (a, b), f in out.seals.items() if s in (a, b))
+        # The run stops while its port flows still drift 0.2 % per hundred iterations:
+        # 2 % of the through-flow (measured 0.6 %).
+        assert abs(inflow) < 2e-2 * through, (s, inflow, through)
+        p = out.chamber_p[s]
+        assert fm.p_suction < p < fm.p_discharge
+    for (a, b), f in out.seals.items():
+        dp = out.chamber_p[b] - out.chamber_p[a]
+        if abs(dp) > 1e-2 * fm.p_suction:
+            assert np.sign(f) == -np.sign(dp), ((a, b), f, dp)

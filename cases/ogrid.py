@@ -11,12 +11,14 @@ Construction, at outer-rotor angle ``phi``:
 
 * Both walls are star-shaped about the outer rotor's axis O1 (checked; a wall that a ray
   from O1 crosses twice raises), so a node of either wall is named by its polar angle
-  about O1, the grid's seam at ``phi + pi/2`` (pin 0's direction: the grid turns with the
-  outer rotor).  Columns sit at equal steps of a monotone law of polar angle that mixes
-  the two walls' mean arc fraction with shares crowded toward the sealing lines (where
-  the walls are close) and toward the walls' sharp bends (:func:`column_angles`), and a
-  column is moved onto each sharp point of the inner profile (at sigma_bar = 1 its
-  undercut edge, which seals).  Inner nodes are put on the true curve by bisection.
+  about O1.  A column sits on each *anchor*, a sharp point of the inner profile (at
+  sigma_bar = 1 its undercut edges, which seal; the seam is the first), and a fixed
+  number of columns between each two anchors at equal steps of a monotone law of polar
+  angle that mixes the two walls' mean arc fraction with shares crowded toward the
+  sealing lines (where the walls are close) and toward the walls' sharp bends,
+  normalised per segment (:mod:`.ogrid_columns`: so the columns move smoothly with the
+  angle, which is what a helical stack of sections needs).  Inner nodes are put on the
+  true curve by bisection.
 * The outer node of a column is the inner node's foot point on the outer wall where the
   walls are close (so a column crosses a sealing gap square, not along the polar ray,
   which meets a contact at the angle between its normal, through the pitch point, and
@@ -45,6 +47,7 @@ from rotorflow.errors import CaseError
 from rotorflow.geometry.curves import Clearance, offset_profile
 from rotorflow.geometry.planar import TWO_PI, rotate
 
+from .ogrid_columns import anchor_parameters, column_angles, segment_columns
 from .ogrid_quality import QualityLimits, check, chord_sag, measure
 
 #: Wall samples per profile piece used to tabulate polar angle and arc length; nodes are
@@ -57,8 +60,6 @@ BISECTIONS = 50
 #: Gauss-Newton steps of a foot point from its nearest wall sample (quadratic close to
 #: the curve; 8 steps from a sample 1/4096 of a piece away leave ~1e-15 of the piece).
 FOOT_NEWTON_STEPS = 8
-#: Columns on each side of a snapped one that share its move (:func:`_snap`).
-SNAP_SPREAD = 6
 #: Smallest polar-angle step between wall samples, rad: a ray from O1 that meets a wall
 #: twice shows as a step at or below zero (the inner profile's zero-speed point at
 #: sigma_bar = 1 turns slowly but never back: its smallest step is ~5e-14 rad).
@@ -89,13 +90,16 @@ class OGridSpec:
     #: of the family's n5-lambda1.3 example at 5 of 11 angles; 0.005 folds none.
     foot_match_reach: float = 0.005
     #: Share of the columns crowded toward the sealing lines, and the wall distance (a
-    #: fraction of the diameter) that counts as near one (:func:`column_angles`).
+    #: fraction of the diameter) that counts as near one (:mod:`.ogrid_columns`).
     gap_clustering: float = 0.6
     gap_reach: float = 0.001
     #: Share of the columns placed by the walls' turning angle: at sigma_bar = 1 the
     #: inner profile's sharp edge bends so tightly that chords of even 100 um cut more
-    #: than the first cell off it.
-    turn_clustering: float = 0.15
+    #: than the first cell off it.  0.08: with the law normalised per segment between
+    #: the sharp points, 0.15 crowded the sharp edge facing the largest chamber to 15 um
+    #: columns whose 27 mm lines crossed (inverted cells at 0 and 13 deg); at 0.08 the
+    #: sections keep skewness 3.9 and the wall sag within 0.3 of the first cell.
+    turn_clustering: float = 0.08
     smoothing_relax: float = 0.5  # under-relaxation of each Jacobi sweep
 
     def check(self) -> None:
@@ -220,57 +224,6 @@ class _PolarTable:
         return 0.5 * (a + b)
 
 
-def column_angles(outer: _PolarTable, inner: _PolarTable, spec, scale: float, start: float):
-    """Polar angles of the columns: equal steps of a monotone measure, the two walls' mean
-    arc fraction with a share ``gap_clustering`` given to where the walls are close
-    (density h_ref / (h + h_ref) in polar angle, h the radial width, h_ref =
-    ``gap_reach`` times the diameter): the columns crowd toward every sealing line and
-    follow it as it moves, with the same count at every angle."""
-    grid = np.linspace(start, start + TWO_PI, 8 * SAMPLES_PER_PIECE + 1)
-    mean = 0.5 * (outer.arc_at(grid) + inner.arc_at(grid))
-    width = np.interp(grid, outer.ang, outer.radius) - np.interp(grid, inner.ang, inner.radius)
-    h_ref = spec.gap_reach * scale
-    density = h_ref / (np.maximum(width, 0.0) + h_ref)
-    narrow = np.concatenate([[0.0], np.cumsum(0.5 * (density[1:] + density[:-1]))])
-    turning = 0.5 * (np.interp(grid, outer.ang, outer.turn)
-                     + np.interp(grid, inner.ang, inner.turn))
-    plain = 1.0 - spec.gap_clustering - spec.turn_clustering
-    law = (plain * mean + spec.gap_clustering * narrow / narrow[-1]
-           + spec.turn_clustering * turning)
-    return np.interp(np.arange(spec.columns) / spec.columns, law, grid)
-
-
-def _sharp_points(wall: Wall) -> np.ndarray:
-    """Parameters of the wall's point of least arc-length speed on each piece: at
-    sigma_bar = 1 the inner profile's undercut point (zero speed, infinite curvature, a
-    sharp edge that seals), elsewhere its sharpest bend.  A column sits on each, or the
-    wall polygon would cut the edge off and open the seal there by more than the first
-    cell (found: 29 um at 13 deg with 1024 columns)."""
-    n = wall.curve.n
-    u = np.linspace(0.0, n, n * SAMPLES_PER_PIECE + 1)[:-1]
-    speed = np.linalg.norm(wall.curve.derivative(u), axis=1).reshape(n, -1)
-    k = np.argmin(speed, axis=1)
-    return np.arange(n) + k / SAMPLES_PER_PIECE
-
-
-def _snap(ang: np.ndarray, targets: np.ndarray, start: float, where: str) -> np.ndarray:
-    """Move the column nearest each target polar angle onto it, and its neighbours by a
-    share falling linearly to zero SNAP_SPREAD columns away (a single moved column
-    leaves a jump in spacing that tilts its cells' faces: 84 deg non-orthogonality)."""
-    ang = ang.copy()
-    m = len(ang)
-    taper = 1.0 - np.abs(np.arange(-SNAP_SPREAD, SNAP_SPREAD + 1)) / (SNAP_SPREAD + 1)
-    for t in targets:
-        i = int(np.argmin(np.abs(np.mod(ang - t + math.pi, TWO_PI) - math.pi)))
-        shift = np.mod(t - ang[i] + math.pi, TWO_PI) - math.pi
-        # A shift is a change of angle, the same on either side of the seam.
-        ang[(i + np.arange(-SNAP_SPREAD, SNAP_SPREAD + 1)) % m] += taper * shift
-    if not np.all(np.diff(ang) > 0.0) or not ang[-1] < ang[0] + TWO_PI:
-        raise CaseError(f"{where}: two sharp points of the inner wall share a column "
-                        "(more columns)")
-    return ang
-
-
 def radial_fractions(cells: int, clustering: float) -> np.ndarray:
     """Node fractions 0..1 across, clustered toward both ends by a tanh law."""
     eta = np.linspace(0.0, 1.0, cells + 1)
@@ -384,12 +337,16 @@ def build_ogrid(pair, phi: float, gap: float, spec: OGridSpec = OGridSpec()) -> 
     spec.check()
     where = f"no O-grid at phi = {math.degrees(phi):.6g} deg"
     outer_wall, inner_wall = walls(pair, phi, gap)
-    start = phi + 0.5 * math.pi
-    outer = _PolarTable(outer_wall, start, where)
-    inner = _PolarTable(inner_wall, start, where)
-    ang = column_angles(outer, inner, spec, pair.diameter, start)
-    sharp = inner_wall.point(_sharp_points(inner_wall))
-    ang = _snap(ang, np.arctan2(sharp[:, 1], sharp[:, 0]), start, where)
+    anchor_u = anchor_parameters(inner_wall)
+    a = inner_wall.point(anchor_u)
+    anchors = np.arctan2(a[:, 1], a[:, 0])
+    anchors = anchors[0] + np.mod(anchors - anchors[0], TWO_PI)
+    if not np.all(np.diff(anchors) > 0.0):
+        raise CaseError(f"{where}: the inner wall's sharp points are not in polar order")
+    outer = _PolarTable(outer_wall, anchors[0], where)
+    inner = _PolarTable(inner_wall, anchors[0], where)
+    counts = segment_columns(inner_wall, anchor_u, spec.columns)
+    ang = column_angles(outer, inner, spec, pair.diameter, anchors, counts)
     u_in = inner.parameter_at(ang)
     p_in = inner_wall.point(u_in)
     u_out = _matched_outer(outer, p_in, outer.parameter_at(ang), spec, pair.diameter, where)

@@ -139,25 +139,35 @@ class ChamberModel:
         return s
 
     # -- right-hand side ---------------------------------------------------------------
-    def _geometry(self, theta: float, seg: Segment):
-        """Geometry of the active slots at ``theta`` (cached: replayed steps repeat angles)."""
-        key = (seg.index, theta)
-        g = self.cache.get(key)
+    def _geometry(self, theta, seg: Segment):
+        """Geometry of the active slots at ``theta`` (cached: replayed steps repeat angles);
+        ``theta`` an array (B,): one angle per batch member, every entry (B, ...)."""
+        multi = np.ndim(theta) > 0
+        key = None if multi else (seg.index, theta)
+        g = None if multi else self.cache.get(key)
         if g is None:
             if len(self.cache) > 20_000:
                 self.cache.clear()
-            V, dV, lin = self.geo.evaluate(theta + seg.kP)
-            flat = lin.ravel()
-            area = seg.area @ flat
+            V, dV, lin = self.geo.evaluate(np.add.outer(theta, seg.kP) if multi
+                                           else theta + seg.kP)
+            if multi:  # (rows, B, na) -> (B, rows * na), the rows' order of ravel()
+                flat = np.swapaxes(lin, 0, 1).reshape(len(theta), -1)
+                area = flat @ seg.area.T
+                links = flat @ seg.link_len.T
+            else:
+                flat = lin.ravel()
+                area = seg.area @ flat
+                links = seg.link_len @ flat if seg.cou_gap.size else None
             cou = None
             if seg.cou_gap.size:
                 # Couette flow: half the tip speed times the gap along each line
-                cou = (self.wall_speed * seg.cou_gap) * (seg.link_len @ flat)
+                cou = (self.wall_speed * seg.cou_gap) * links
             wall = None
             if self.op.heat_transfer_W_m2K > 0.0:
                 wall = self.op.heat_transfer_W_m2K * WALL_AREA_FACTOR * V ** (2.0 / 3.0)
             g = (V, 1.0 / V, dV, self.geo.omega_outer * dV, area, cou, wall)
-            self.cache[key] = g
+            if not multi:
+                self.cache[key] = g
         return g
 
     def _nodes(self, B: int, na: int):
@@ -281,8 +291,9 @@ class ChamberModel:
         rr[:, d] = np.where(fwd[:, c], rb / ra, ra / rb)
         return v, rr
 
-    def rhs(self, theta: float, y: np.ndarray, seg: Segment) -> np.ndarray:
-        """dy/dtheta for a batch of states y (B, n_state) inside segment ``seg``."""
+    def rhs(self, theta, y: np.ndarray, seg: Segment) -> np.ndarray:
+        """dy/dtheta for a batch of states y (B, n_state) inside segment ``seg``, at one
+        angle ``theta`` or at one per state (an array (B,))."""
         n, na = self.n, seg.n_act
         F, E, g, m, rho, u, p, T, h, Fo, Eo = self._flows(theta, y, seg)
         V, dV, Vt, wall = g[0], g[2], g[3], g[6]
@@ -321,7 +332,7 @@ class ChamberModel:
         rc, uc, pc, hc = rho[:, c], u[:, c], p[:, c], h[:, c]
         hpl = seg.ideal_h
         tgt = (seg.ideal_p - pc) * (self.geo.omega_outer / IDEAL_PORT_RELAXATION_RAD)
-        Vc, Vtc = V[c], Vt[c]
+        Vc, Vtc = V[..., c], Vt[..., c]
         if self.ideal_gas:
             g1 = fl.gamma - 1.0
             num = Vc * tgt / g1 - Bh + rc * hc * Vtc
@@ -337,13 +348,14 @@ class ChamberModel:
         return x
 
     # -- observation -----------------------------------------------------------------
-    def observe(self, theta: float, y: np.ndarray):
-        """Volume, p, T, m of every slot for one state y (n_state,); NaN where inactive."""
+    def observe(self, theta, y: np.ndarray):
+        """Ages, volume, p, T, m of every slot for one state y (n_state,) at theta, or for
+        states y (N, n_state) at angles theta (N,) (then each (N, n)); NaN where inactive."""
         n = self.n
-        ages = theta + self.geo.period * np.arange(n)
+        ages = np.add.outer(theta, self.geo.period * np.arange(n))
         V = self.geo.volume(np.minimum(ages, self.geo.death))
-        m = y[:n].copy()
-        U = y[n:2 * n]
+        m = y[..., :n].copy()
+        U = y[..., n:2 * n]
         live = (ages <= self.geo.death * (1 + 1e-12)) & (m > 0)
         m[~live] = np.nan
         with np.errstate(invalid="ignore", divide="ignore"):

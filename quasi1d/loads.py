@@ -209,7 +209,6 @@ def fine_traces(result: SimulationResult) -> dict:
             fine_y.append(fine.reshape(-1, y.shape[1]))
     finally:
         model.cache.clear()
-        model.work.clear()
     dense = replace(run, trace_theta=list(np.concatenate(fine_t)),
                     trace_y=list(np.concatenate(fine_y)))
     return traces(replace(sol, run=dense))[0]

@@ -112,8 +112,12 @@ class ChamberModel:
 
     def state_columns(self, seg: Segment) -> np.ndarray:
         """Columns of y the right-hand side depends on in ``seg`` (active slots' states)."""
-        n, na = self.n, seg.n_act
-        return np.concatenate([np.arange(b * n, b * n + na) for b in range(self.nv)])
+        key = ("columns", seg.index)
+        if key not in self.fast:
+            n, na = self.n, seg.n_act
+            self.fast[key] = np.concatenate([np.arange(b * n, b * n + na)
+                                             for b in range(self.nv)])
+        return self.fast[key]
 
     def scales(self) -> np.ndarray:
         """Reference magnitudes per state component (for the absolute tolerance)."""
@@ -270,7 +274,7 @@ class ChamberModel:
         """dy/dtheta for a batch of states y (B, n_state) inside segment ``seg``, at one
         angle ``theta`` or at one per state (an array (B,))."""
         fused = self.fast.get("kernel")
-        if fused is not None and not np.ndim(theta):
+        if fused is not None and not getattr(theta, "ndim", 0):
             args = self._fused_args(seg)
             if args is not None:
                 g = self._geometry(theta, seg)

@@ -5,6 +5,11 @@ Issue 19's targets, on the default case: `rotorflow geometry CASE --json` under 
 imports, reading the case and the computation), and `rotorflow map` of 10 x 10 points
 under 30 s on 2 cores with every point converged. Timings depend on the machine and its
 load, so they are measured here with the load beside them, not asserted by tests.
+
+``simulate`` runs as a user's process does: a single point stays in numpy, numba is not
+imported (rotorflow.quasi1d.compiled).  Beside it, the same process with the compiled
+right-hand side forced (ROTORFLOW_COMPILED=1): from numba's on-disk cache (warm), and
+the first run against an empty cache (cold: numba compiles).
 """
 
 from __future__ import annotations
@@ -22,13 +27,15 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 CASE = REPO / "examples" / "default.toml"
 REPEATS = 7
-TARGETS_S = {"geometry": 0.5, "simulate": 1.0, "map": 30.0}
+TARGETS_S = {"geometry": 0.5, "simulate": 1.0, "simulate compiled (warm cache)": 1.0,
+             "simulate compiled (cold cache)": 1.0, "map": 30.0}
 
 
-def _timed(args: list[str], cwd: Path) -> float:
+def _timed(args: list[str], cwd: Path, env: dict | None = None) -> float:
     t0 = time.perf_counter()
     out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", *args],
-                         capture_output=True, text=True, cwd=cwd)
+                         capture_output=True, text=True, cwd=cwd,
+                         env=None if env is None else {**os.environ, **env})
     wall = time.perf_counter() - t0
     if out.returncode != 0:
         raise RuntimeError(f"rotorflow {args[0]} failed: {out.stderr.strip()[-400:]}")
@@ -43,6 +50,11 @@ def run(results_dir: Path) -> list[dict]:
         for command in ("geometry", "simulate"):
             times = sorted(_timed([command, str(CASE), "--json"], work) for _ in range(REPEATS))
             rows.append(_row(command, times))
+        sim = ["simulate", str(CASE), "--json"]
+        cold = {"ROTORFLOW_COMPILED": "1", "NUMBA_CACHE_DIR": str(work / "numba")}
+        rows.append(_row("simulate compiled (cold cache)", [_timed(sim, work, cold)]))
+        times = sorted(_timed(sim, work, cold) for _ in range(REPEATS))
+        rows.append(_row("simulate compiled (warm cache)", times))
         t = _timed(["map", str(CASE), "--workers", "2", "--no-progress",
                     "--build", str(work / "build")], work)
         record = json.loads((work / "build" / "map" / "default" / "map.json").read_text())

@@ -73,7 +73,8 @@ class ChamberGeometry:
 
     def evaluate(self, ages: np.ndarray):
         """V, dV/dangle and the linear columns at the given ages (rows, then ages.shape)."""
-        i = np.clip(np.searchsorted(self.nodes, ages, side="right") - 1, 0, self.coef.shape[1] - 1)
+        i = np.minimum(np.maximum(np.searchsorted(self.nodes, ages, side="right") - 1, 0),
+                       self.coef.shape[1] - 1)  # (np.clip costs ~5 us more a call)
         s = ages - self.nodes[i]
         c = self.coef[:, i]
         V = ((c[3] * s + c[2]) * s + c[1]) * s + c[0]

@@ -66,21 +66,13 @@ class TabulatedFluid:
                    float(ug[1] - ug[0]), nodes, nodes, tab.reshape(5, -1), cells)
 
     def _interp(self, rho, u, rows):
-        fx = (np.log(rho) - self.x0) / self.dx
-        fu = (u - self.u0) / self.du
-        i = np.clip(fx.astype(np.intp), 0, self.nx - 2)
-        j = np.clip(fu.astype(np.intp), 0, self.nu - 2)
-        tx = fx - i
-        tu = fu - j
-        k = i * self.nu + j
-        t = self.table[rows]
-        c00 = t[:, k]
-        c01 = t[:, k + 1]
-        c10 = t[:, k + self.nu]
-        c11 = t[:, k + self.nu + 1]
-        a = c00 + tu * (c01 - c00)
-        b = c10 + tu * (c11 - c10)
-        return a + tx * (b - a)
+        return table_interp(np.asarray(rho, dtype=float), np.asarray(u, dtype=float),
+                            self.x0, self.dx, self.u0, self.du, self.nu, self.table,
+                            rows.start, rows.stop)
+
+    def kernel_params(self):
+        """(kind, parameters, table) of the compiled right-hand side (:mod:`.kernel`)."""
+        return 2, np.array([self.x0, self.dx, self.u0, self.du, float(self.nu)]), self.table
 
     def props(self, rho, u):
         v = self._interp(rho, u, slice(0, 3))
@@ -192,6 +184,29 @@ class TabulatedFluid:
             return None
         st = self._upd("PT_INPUTS", p2, T1)
         return (st.hmass() - h1) - T1 * (st.smass() - s1)
+
+
+def table_interp(rho, u, x0, dx, u0, du, nu, table, r0, r1):
+    """Rows r0..r1-1 of the table (ln p, T, kappa, dp/drho|u, dp/du|rho) interpolated
+    bilinearly in (ln rho, u) at arrays rho, u: (r1 - r0, *rho.shape).  Plain numpy that
+    :mod:`.compiled` also compiles."""
+    nx = table.shape[1] // nu
+    fx = (np.log(rho.ravel()) - x0) / dx
+    fu = (u.ravel() - u0) / du
+    i = np.minimum(np.maximum(fx.astype(np.intp), 0), nx - 2)
+    j = np.minimum(np.maximum(fu.astype(np.intp), 0), nu - 2)
+    tx = fx - i
+    tu = fu - j
+    k = i * nu + j
+    out = np.empty((r1 - r0, fx.size))
+    for r in range(r0, r1):
+        t = table[r]
+        c00 = t[k]
+        c10 = t[k + nu]
+        a = c00 + tu * (t[k + 1] - c00)
+        b = c10 + tu * (t[k + nu + 1] - c10)
+        out[r - r0] = a + tx * (b - a)
+    return out.reshape((r1 - r0,) + rho.shape)
 
 
 @functools.lru_cache(maxsize=16)

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import compiled
 from .integrate import IntegrationError, PeriodRun, integrate_period
 from .model import ChamberModel
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_M_DIS, ACC_M_SUC, ACC_Q, ACC_W
@@ -133,6 +134,15 @@ def _damped(model, best, idx, lam):
 
 
 def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolution:
+    cpu = time.process_time()
+    model.fast["kernel"] = compiled.kernel_for_point()  # None: numpy (see .compiled)
+    try:
+        return _solve(model, num, record)
+    finally:
+        compiled.note_work(time.process_time() - cpu)
+
+
+def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
     scales = model.scales()
     atol = num.atol * model.atol_scales()
     idx = _unknowns(model)
@@ -206,8 +216,7 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
             f"relative change of p {dp:.2e}, T {dT:.2e}, mass balance {mc:.2e}, "
             f"energy balance {ec:.2e}")
     mc, ec, cm, ce = balances(model, z, run.y[0])
-    model.cache.clear()  # the result keeps the model; not its work arrays
-    model.work.clear()
+    model.cache.clear()  # the result keeps the model; not its geometry cache
     return CycleSolution(model, z, run, cycles, converged, message, dp, dT, mc, ec, cm, ce,
                          n_rhs)
 

@@ -104,14 +104,14 @@ class ThermallyPerfectGas:
         """T, kappa and 1/cv at u.  dp/du uses the interpolated 1/cv, continuous in u: the
         interpolant's own slope (piecewise constant) agrees with p to round-off but its
         jumps stall the cycle convergence of 8 % of the stress points."""
-        u0, du, nu, rows = self._table
-        f = (np.asarray(u, dtype=float) - u0) / du
-        j = np.clip(f.astype(np.intp), 0, nu - 2)
-        t = f - j
-        c0 = rows[:, j]
-        dc = rows[:, j + 1] - c0
-        v = c0 + t * dc
+        u0, du, _, rows = self._table
+        v = table_interp(np.asarray(u, dtype=float), u0, du, rows)
         return v[0], v[1], v[2]
+
+    def kernel_params(self):
+        """(kind, parameters, table) of the compiled right-hand side (:mod:`.kernel`)."""
+        u0, du, _, rows = self._table
+        return 1, np.array([u0, du, self.R]), rows
 
     def props(self, rho, u):
         T, kappa, _ = self._interp(u)
@@ -170,6 +170,20 @@ class ThermallyPerfectGas:
 
     def work_isothermal(self, p1, T1, p2):
         return self.R * T1 * math.log(p2 / p1)
+
+
+def table_interp(u, u0, du, rows):
+    """Rows (T, kappa, 1/cv) of the table interpolated linearly at u (an array, any
+    shape): (3, *u.shape).  Plain numpy that :mod:`.compiled` also compiles."""
+    nu = rows.shape[1]
+    f = (u.ravel() - u0) / du
+    j = np.minimum(np.maximum(f.astype(np.intp), 0), nu - 2)
+    t = f - j
+    out = np.empty((3, f.size))
+    for r in range(3):
+        c0 = rows[r][j]
+        out[r] = c0 + t * (rows[r][j + 1] - c0)
+    return out.reshape((3,) + u.shape)
 
 
 @functools.lru_cache(maxsize=1)

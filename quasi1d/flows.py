@@ -72,14 +72,26 @@ def nozzle_psi(x, k):
     """The isentropic nozzle's flux over sqrt(p1 rho1) for x = p2/p1 in [0, 1] (arrays or
     scalars): Eqs. 7-8, choked below the critical ratio; not smoothed at x -> 1."""
     if np.ndim(k):
-        near = np.abs(k - 1.0) < K_ONE_GAP
-        if near.any():  # HEM two-phase exponents pass through 1 (module docstring)
-            k = np.where(near, np.where(k < 1.0, 1.0 - K_ONE_GAP, 1.0 + K_ONE_GAP), k)
-        xc = nozzle_critical_ratio(k)
-        c = 2.0 * k / (k - 1.0)
-        ik = 1.0 / k
-    else:
-        xc, c, ik = _nozzle_constants(float(k))
+        return _psi_k(x, k)
+    return _psi(x, *_nozzle_constants(float(k)))
+
+
+def _psi_k(x, k):
+    """nozzle_psi for an array of exponents k (plain numpy, compiled by :mod:`.compiled`)."""
+    xc, c, ik = nozzle_constants(k)
+    return _psi(x, xc, c, ik)
+
+
+def nozzle_constants(k):
+    """(critical ratio, 2k / (k - 1), 1 / k) of :func:`_psi` for an array of exponents k
+    (per node: the flows gather them, one power per node instead of per flow)."""
+    near = np.abs(k - 1.0) < K_ONE_GAP
+    if near.any():  # HEM two-phase exponents pass through 1 (module docstring)
+        k = np.where(near, 1.0 + np.copysign(K_ONE_GAP, k - 1.0), k)
+    return nozzle_critical_ratio(k), 2.0 * k / (k - 1.0), 1.0 / k
+
+
+def _psi(x, xc, c, ik):
     xe = np.maximum(x, xc)
     r = xe**ik  # x^(2/k) - x^((k+1)/k) = r (r - x): one power instead of two
     return np.sqrt(c * r * (r - xe))
@@ -89,6 +101,11 @@ def nozzle_f(x, k):
     """Dimensionless nozzle flux f(x, k) of the chamber model: :func:`nozzle_psi` with the
     pressure drop smoothed near x = 1 (see the module docstring)."""
     return nozzle_psi(_x_eff(x), k)
+
+
+def nozzle_f_c(x, xc, c, ik):
+    """:func:`nozzle_f` from the exponent's :func:`nozzle_constants` (arrays like x)."""
+    return _psi(_x_eff(x), xc, c, ik)
 
 
 def isentropic_mass_flux(p0: float, T0: float, p: float, gamma: float, R: float) -> float:

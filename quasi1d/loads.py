@@ -198,8 +198,7 @@ def fine_traces(result: SimulationResult) -> dict:
             fine_y.append(y[:1])
             if count < 2:
                 continue
-            f = np.concatenate([model.rhs(float(ti), yi[None], seg) for ti, yi in
-                                zip(t, y, strict=True)])
+            f = model.rhs(t, y, seg)  # every recorded step at its own angle, one call
             h = np.diff(t)[:, None, None]
             s = np.linspace(0.0, 1.0, TRACE_REFINEMENT + 1)[1:][None, :, None]
             h00, h10 = (1 + 2 * s) * (1 - s) ** 2, s * (1 - s) ** 2
@@ -210,7 +209,6 @@ def fine_traces(result: SimulationResult) -> dict:
             fine_y.append(fine.reshape(-1, y.shape[1]))
     finally:
         model.cache.clear()
-        model.work.clear()
     dense = replace(run, trace_theta=list(np.concatenate(fine_t)),
                     trace_y=list(np.concatenate(fine_y)))
     return traces(replace(sol, run=dense))[0]

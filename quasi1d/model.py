@@ -45,7 +45,7 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from . import events, flows
+from . import events, flows, kernel
 from .chamber import ChamberGeometry
 from .fluids import suction_given
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_Q, ACC_W, AccColumns, Segment, segments
@@ -59,6 +59,8 @@ from .settings import Leakage, Operating, Ports
 # takes for stability (its eigenvalue -1/0.2 per rad) while removing offsets within a
 # fraction of a period.
 IDEAL_PORT_RELAXATION_RAD = 0.2
+
+_NO_WALL = np.empty(0)  # the compiled right-hand side's "no heat transfer"
 
 # Wall area of a chamber for heat transfer: that of a cube of the same volume, 6 V^(2/3).
 WALL_AREA_FACTOR = 6.0
@@ -93,7 +95,8 @@ class ChamberModel:
     ideal_gas: bool
     inv_omega: float
     cache: dict = field(default_factory=dict, repr=False, compare=False)
-    work: dict = field(default_factory=dict, repr=False, compare=False)
+    # the compiled right-hand side ("kernel", set by the cycle solver) and its arguments
+    fast: dict = field(default_factory=dict, repr=False, compare=False)
 
     # -- layout --------------------------------------------------------------------
     @property
@@ -109,8 +112,12 @@ class ChamberModel:
 
     def state_columns(self, seg: Segment) -> np.ndarray:
         """Columns of y the right-hand side depends on in ``seg`` (active slots' states)."""
-        n, na = self.n, seg.n_act
-        return np.concatenate([np.arange(b * n, b * n + na) for b in range(self.nv)])
+        key = ("columns", seg.index)
+        if key not in self.fast:
+            n, na = self.n, seg.n_act
+            self.fast[key] = np.concatenate([np.arange(b * n, b * n + na)
+                                             for b in range(self.nv)])
+        return self.fast[key]
 
     def scales(self) -> np.ndarray:
         """Reference magnitudes per state component (for the absolute tolerance)."""
@@ -139,40 +146,36 @@ class ChamberModel:
         return s
 
     # -- right-hand side ---------------------------------------------------------------
-    def _geometry(self, theta: float, seg: Segment):
-        """Geometry of the active slots at ``theta`` (cached: replayed steps repeat angles)."""
-        key = (seg.index, theta)
-        g = self.cache.get(key)
+    def _geometry(self, theta, seg: Segment):
+        """Geometry of the active slots at ``theta`` (cached: replayed steps repeat angles);
+        ``theta`` an array (B,): one angle per batch member, every entry (B, ...)."""
+        multi = np.ndim(theta) > 0
+        key = None if multi else (seg.index, theta)
+        g = None if multi else self.cache.get(key)
         if g is None:
             if len(self.cache) > 20_000:
                 self.cache.clear()
-            V, dV, lin = self.geo.evaluate(theta + seg.kP)
-            flat = lin.ravel()
-            area = seg.area @ flat
+            V, dV, lin = self.geo.evaluate(np.add.outer(theta, seg.kP) if multi
+                                           else theta + seg.kP)
+            if multi:  # (rows, B, na) -> (B, rows * na), the rows' order of ravel()
+                flat = np.swapaxes(lin, 0, 1).reshape(len(theta), -1)
+                area = flat @ seg.area.T
+                links = flat @ seg.link_len.T
+            else:
+                flat = lin.ravel()
+                area = seg.area @ flat
+                links = seg.link_len @ flat if seg.cou_gap.size else None
             cou = None
             if seg.cou_gap.size:
                 # Couette flow: half the tip speed times the gap along each line
-                cou = (self.wall_speed * seg.cou_gap) * (seg.link_len @ flat)
+                cou = (self.wall_speed * seg.cou_gap) * links
             wall = None
             if self.op.heat_transfer_W_m2K > 0.0:
                 wall = self.op.heat_transfer_W_m2K * WALL_AREA_FACTOR * V ** (2.0 / 3.0)
             g = (V, 1.0 / V, dV, self.geo.omega_outer * dV, area, cou, wall)
-            self.cache[key] = g
+            if not multi:
+                self.cache[key] = g
         return g
-
-    def _nodes(self, B: int, na: int):
-        """Work arrays of node values (B, na+2) with the plenum columns filled in."""
-        key = (B, na)
-        w = self.work.get(key)
-        if w is None:
-            w = np.empty((4, B, na + 2))
-            for i, (s, d) in enumerate(((self.suc.p, self.dis.p), (self.suc.rho, self.dis.rho),
-                                         (self.suc.h, self.dis.h),
-                                         (self.suc.kappa, self.dis.kappa))):
-                w[i, :, 0] = s
-                w[i, :, -1] = d
-            self.work[key] = w
-        return w
 
     @property
     def wall_speed(self) -> float:
@@ -209,58 +212,44 @@ class ChamberModel:
     def _flows(self, theta: float, y: np.ndarray, seg: Segment):
         """Gas mass and enthalpy flows of every path, with the slot states they came
         from, then the leakage's oil mass and enthalpy flows (None, None: gas only)."""
-        na, fl = seg.n_act, self.fluid
-        n = self.n
-        B = y.shape[0]
+        na, fl, n, suc, dis = seg.n_act, self.fluid, self.n, self.suc, self.dis
         g = self._geometry(theta, seg)
         iV, area, cou = g[1], g[4], g[5]
         m = y[:, :na]
-        U = y[:, n:n + na]
         rho = m * iV
-        u = U / m
+        u = y[:, n:n + na] / m
         p, T, kap = fl.props(rho, u)
         h = u * fl.gamma if self.ideal_gas else u + p / rho
-        W = self._nodes(B, na)
-        W[0, :, 1:na + 1] = p
-        W[1, :, 1:na + 1] = rho
-        W[2, :, 1:na + 1] = h
+        R = kernel.nodes(rho, suc.rho, dis.rho)
+        fwd, x, p1, r1 = kernel.upstream(kernel.nodes(p, suc.p, dis.p), R, seg.ia, seg.ib)
         scalar_k = not np.ndim(kap)
+        k1 = kap
         if not scalar_k:
-            W[3, :, 1:na + 1] = kap
-        R = W[1]
-        Wa = W[:, :, seg.ia]  # (4, B, n_flows): both ends of every flow path in two gathers
-        Wb = W[:, :, seg.ib]
-        pa, pb = Wa[0], Wb[0]
-        fwd = pa >= pb
-        p1 = np.maximum(pa, pb)
-        x = np.minimum(pa, pb) / p1
-        r1 = np.where(fwd, Wa[1], Wb[1])
-        k1 = kap if scalar_k else np.where(fwd, Wa[3], Wb[3])
+            K = kernel.nodes(kap, suc.kappa, dis.kappa)
+            k1 = np.where(fwd, K[:, seg.ia], K[:, seg.ib])
         f = _flux(seg, x, k1, scalar_k)
-        S = np.sqrt(p1 * r1)
         for grp in seg.groups:
             if grp.model == "cfd-calibrated":
                 c = grp.flows
-                v, rr = self._drag_ratios(grp, x, fwd, r1, p1, Wa[1], Wb[1])
+                ra, rb = R[:, seg.ia], R[:, seg.ib]
+                v, rr = self._drag_ratios(grp, x, fwd, r1, p1, ra, rb)
                 # Cd psi in the fit's form that is finite through x -> 1
                 # (FlowCoefficientFit.reduced_flux): PR = 1/x, K = 24 L mu / (h^2 S) with
                 # S = sqrt(p_up rho_up)
-                f[:, c] = grp.correlation.reduced_flux(f[:, c], 1.0 / x[:, c],
-                                                       grp.k_factor / S[:, c], v, rr)
+                f[:, c] = grp.correlation.reduced_flux(
+                    f[:, c], 1.0 / x[:, c], grp.k_factor / np.sqrt(p1[:, c] * r1[:, c]), v, rr)
             elif grp.model == "rarefied":  # f holds the nozzle's: its inertial limit
                 c = grp.flows
                 f[:, c] = grp.rarefied.reduced_flux(f[:, c], x[:, c], p1[:, c], r1[:, c])
-        F = S * f * area
-        F = np.where(fwd, F, -F)
+        F = kernel.mass_flows(fwd, p1, r1, f, area)
         oil_flows = (None, None)
         if seg.oil is not None:  # a homogeneous gas-oil mixture leaks (see .oil)
             oil_flows = oil_leakage(seg, F, *node_loads(self, y, m, na))
         if cou is not None:
             # Couette flow: carried from the older (node ib) into the younger chamber (ia)
             F[:, seg.cou] -= cou * R[:, seg.cou_older]
-        if seg.walls:
-            fwd = F > 0.0  # the walls may carry the flow against the pressure difference
-        E = F * np.where(fwd, Wa[2], Wb[2])
+        H = kernel.nodes(h, suc.h, dis.h)  # the walls may carry flow against the pressure
+        E = kernel.enthalpy_flows(F, H[:, seg.ia], H[:, seg.ib])
         return F, E, g, m, rho, u, p, T, h, *oil_flows
 
     def _drag_ratios(self, grp, x, fwd, r1, p1, ra, rb):
@@ -281,17 +270,24 @@ class ChamberModel:
         rr[:, d] = np.where(fwd[:, c], rb / ra, ra / rb)
         return v, rr
 
-    def rhs(self, theta: float, y: np.ndarray, seg: Segment) -> np.ndarray:
-        """dy/dtheta for a batch of states y (B, n_state) inside segment ``seg``."""
+    def rhs(self, theta, y: np.ndarray, seg: Segment) -> np.ndarray:
+        """dy/dtheta for a batch of states y (B, n_state) inside segment ``seg``, at one
+        angle ``theta`` or at one per state (an array (B,))."""
+        fused = self.fast.get("kernel")
+        if fused is not None and not getattr(theta, "ndim", 0):
+            args = self._fused_args(seg)
+            if args is not None:
+                g = self._geometry(theta, seg)
+                wall = g[6] if g[6] is not None else _NO_WALL
+                return fused(y, self.n, seg.n_act, g[0], g[1], g[2], g[3], g[4], wall,
+                             self.op.wall_temperature_K, self.inv_omega,
+                             self.geo.omega_outer, IDEAL_PORT_RELAXATION_RAD, *args)
         n, na = self.n, seg.n_act
         F, E, g, m, rho, u, p, T, h, Fo, Eo = self._flows(theta, y, seg)
         V, dV, Vt, wall = g[0], g[2], g[3], g[6]
-        dy = F @ seg.mm + E @ seg.me + np.abs(F) @ seg.mg
-        pdV = p * dV
-        dy[:, n:n + na] -= pdV
         w = self.inv_omega
         acc0 = self.nv * n
-        dy[:, acc0 + ACC_W] = -pdV.sum(axis=1)
+        dy, pdV = kernel.balances(F, E, seg.mm, seg.me, seg.mg, p, dV, n, acc0 + ACC_W)
         q = None
         if wall is not None:
             q = wall * (self.op.wall_temperature_K - T)
@@ -305,45 +301,48 @@ class ChamberModel:
             dy[:, n:n + na] += q * w
         xs = None
         if seg.ideal.size:
-            xs = self._ideal_ports(seg, dy, pdV, V, Vt, rho, u, p, h)
+            gamma, pr, pu = (self.fluid.gamma, p, p) if self.ideal_gas else (
+                0.0, *self.fluid.dp(rho, u))
+            xs = kernel.ideal_ports(dy, pdV, V, Vt, rho, u, p, h, pr, pu, seg.ideal,
+                                    seg.ideal_p, seg.ideal_h, seg.mx, seg.mxe,
+                                    self.geo.omega_outer, IDEAL_PORT_RELAXATION_RAD, n, gamma)
         if self.oil:
             slot_balances(self, seg, dy, xs, F, None if Fo is None else (Fo, Eo), y, m,
                           q_oil, w)
         return dy
 
-    def _ideal_ports(self, seg, dy, pdV, V, Vt, rho, u, p, h):
-        """Add the ideal ports' flows (those that hold the open slots at the plenum
-        pressure) to dy in place; returns them."""
-        n, fl = self.n, self.fluid
-        c = seg.ideal
-        A = dy[:, c] * self.geo.omega_outer  # other mass flows in (kg/s)
-        Bh = (dy[:, n + c] + pdV[:, c]) * self.geo.omega_outer  # other enthalpy + heat (W)
-        rc, uc, pc, hc = rho[:, c], u[:, c], p[:, c], h[:, c]
-        hpl = seg.ideal_h
-        tgt = (seg.ideal_p - pc) * (self.geo.omega_outer / IDEAL_PORT_RELAXATION_RAD)
-        Vc, Vtc = V[c], Vt[c]
-        if self.ideal_gas:
-            g1 = fl.gamma - 1.0
-            num = Vc * tgt / g1 - Bh + rc * hc * Vtc
-            x = num / np.where(num > 0.0, hpl, hc)
-        else:
-            pr, pu = fl.dp(rc, uc)
-            num = Vc * tgt - pr * (A - rc * Vtc) - pu * (Bh - pc * Vtc - uc * A) / rc
-            x_in = num / (pr + pu * (hpl - uc) / rc)
-            x_out = num / (pr + pu * (hc - uc) / rc)
-            x = np.where(x_in > 0.0, x_in, np.minimum(x_out, 0.0))
-        hx = np.where(x > 0.0, hpl, hc)
-        dy += x @ seg.mx + (x * hx) @ seg.mxe
-        return x
+    def _fused_args(self, seg: Segment):
+        """The segment's arguments of the compiled right-hand side after the geometry
+        (:func:`.kernel.rhs_fused`), None where it needs more (:func:`.kernel.fusable`)."""
+        key = ("fused", seg.index)
+        if key not in self.fast:
+            args = None
+            if kernel.fusable(self, seg):
+                nf = seg.ia.size
+                fanno, zeta, x_choke = np.zeros(nf, bool), np.zeros(nf), np.zeros(nf)
+                for grp in seg.groups:
+                    if grp.model == "fanno":
+                        fanno[grp.flows], zeta[grp.flows] = True, grp.zeta
+                        x_choke[grp.flows] = grp.x_choke
+                s, d = self.suc, self.dis
+                plen = np.array([[s.p, d.p], [s.rho, d.rho], [s.h, d.h], [s.kappa, d.kappa]])
+                acc0 = self.nv * self.n
+                args = (seg.ia, seg.ib, fanno, zeta, x_choke, seg.mm, seg.me, seg.mg,
+                        acc0 + ACC_W, acc0 + ACC_Q, seg.ideal, seg.ideal_p, seg.ideal_h,
+                        seg.mx, seg.mxe, plen, *self.fluid.kernel_params(),
+                        self.fluid.gamma if self.ideal_gas else 0.0)
+            self.fast[key] = args
+        return self.fast[key]
 
     # -- observation -----------------------------------------------------------------
-    def observe(self, theta: float, y: np.ndarray):
-        """Volume, p, T, m of every slot for one state y (n_state,); NaN where inactive."""
+    def observe(self, theta, y: np.ndarray):
+        """Ages, volume, p, T, m of every slot for one state y (n_state,) at theta, or for
+        states y (N, n_state) at angles theta (N,) (then each (N, n)); NaN where inactive."""
         n = self.n
-        ages = theta + self.geo.period * np.arange(n)
+        ages = np.add.outer(theta, self.geo.period * np.arange(n))
         V = self.geo.volume(np.minimum(ages, self.geo.death))
-        m = y[:n].copy()
-        U = y[n:2 * n]
+        m = y[..., :n].copy()
+        U = y[..., n:2 * n]
         live = (ages <= self.geo.death * (1 + 1e-12)) & (m > 0)
         m[~live] = np.nan
         with np.errstate(invalid="ignore", divide="ignore"):

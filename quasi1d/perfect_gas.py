@@ -88,6 +88,10 @@ class PerfectGas:
     def props(self, rho, u):
         return self._g1 * rho * u, u * self._icv, self.gamma
 
+    def kernel_params(self):
+        """(kind, parameters, table) of the compiled right-hand side (:mod:`.kernel`)."""
+        return 0, np.array([self._g1, self._icv, self.gamma]), np.zeros((1, 1))
+
     def dp(self, rho, u):
         g1 = self.gamma - 1.0
         return g1 * u, g1 * rho

@@ -73,12 +73,7 @@ def traces(sol: CycleSolution):
     ys = np.asarray(sol.run.trace_y)
     order = np.argsort(th, kind="stable")
     th, ys = th[order], ys[order]
-    rows = [model.observe(t, y) for t, y in zip(th, ys, strict=True)]
-    ages = np.array([r[0] for r in rows])
-    V = np.array([r[1] for r in rows])
-    p = np.array([r[2] for r in rows])
-    T = np.array([r[3] for r in rows])
-    m = np.array([r[4] for r in rows])
+    ages, V, p, T, m = model.observe(th, ys)
     machine = {"theta_rad": th, "volume_m3": V, "p_Pa": p, "T_K": T, "m_kg": m}
     live = np.isfinite(p)
     a = ages[live]

@@ -90,7 +90,7 @@ def simulate_transient(table, operating: Operating, angles_rad, leakage: Leakage
     if y_start.shape != (model.n_state,):
         raise CaseError(f"y0 must hold the model's {model.n_state} state values")
     split = replace(model, segments=_split(model.segments, np.unique(stops), tol), cache={},
-                    work={})
+                    fast={})
     run = integrate_period(split, y_start[None, :], num.integrator, num.rtol,
                            num.atol * model.atol_scales(), record=True,
                            max_steps=num.max_steps)
@@ -101,8 +101,7 @@ def simulate_transient(table, operating: Operating, angles_rad, leakage: Leakage
                                                    - stops) > tol):
         raise RuntimeError("an output angle is missing from the integrator's trace")
     y = ys[rows]
-    obs = [model.observe(t, yy) for t, yy in zip(stops, y, strict=True)]
-    V, p, T, m = (np.array([o[i] for o in obs]) for i in (1, 2, 3, 4))
+    _, V, p, T, m = model.observe(stops, y)
     return TransientResult(angles, V, p, T, m, y, model, run.method, run.n_rhs)
 
 

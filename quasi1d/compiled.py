@@ -1,0 +1,119 @@
+"""The compiled right-hand side: :func:`.kernel.rhs_fused` and the physics it calls,
+compiled by numba, loaded only where it pays.
+
+Numba is imported lazily and its machine code cached on disk (``cache=True``).  Even
+from its cache, loading costs a process ~0.5 s CPU (numba's import, its typing
+registries, scipy.linalg for the matrix products), five times what one ideal-port
+operating point of the default case takes in numpy; compiling into an empty cache costs
+~30 s CPU.  So in "auto" (the default) a process starts in numpy and loads the compiled
+function once its cycle solutions have taken COMPILE_AFTER_S (a performance map, a
+sweep, an optimisation, a benchmark) and only if the cache holds it; each operating
+point is solved wholly by one of the two, which agree to round-off.  The cache is
+filled by ``python -m rotorflow.quasi1d.compiled`` (or by any run with
+``ROTORFLOW_COMPILED=1``, which compiles from the first point); ``=0`` never compiles
+(the numpy reference).  Without numba the model stays in numpy.
+
+The cache sits in numba's cache directory (NUMBA_CACHE_DIR, else ~/.cache) under a
+hash of the sources compiled: numba checks only the compiled function's own file, not
+the helpers it inlines from the fluid and flow modules.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import os
+from pathlib import Path
+
+# CPU seconds of cycle solutions after which a process loads the compiled function (see
+# the docstring): about numba's loading cost, so that no process spends more than twice
+# what it needs.
+COMPILE_AFTER_S = 0.5
+MODES = ("auto", "0", "1")
+
+_state = {"kernel": None, "work_s": 0.0, "failed": False}
+
+
+def mode() -> str:
+    m = os.environ.get("ROTORFLOW_COMPILED", "auto")
+    return m if m in MODES else "auto"
+
+
+def note_work(seconds: float) -> None:
+    """Count CPU seconds spent solving cycles (towards COMPILE_AFTER_S)."""
+    _state["work_s"] += seconds
+
+
+def kernel_for_point():
+    """The compiled right-hand side for the next operating point, or None (numpy)."""
+    m = mode()
+    if m == "0" or _state["failed"]:
+        return None
+    if _state["kernel"] is None and (m == "1" or (_state["work_s"] >= COMPILE_AFTER_S
+                                                   and _cached())):
+        _state["kernel"] = _compile()
+    return _state["kernel"]
+
+
+def _cache_dir() -> Path:
+    from . import kernel
+
+    digest = hashlib.sha256()
+    for fn in (*_helpers(), kernel.rhs_fused):
+        digest.update(inspect.getsource(fn).encode())
+    base = os.environ.get("NUMBA_CACHE_DIR") or str(Path.home() / ".cache")
+    return Path(base) / "rotorflow-numba" / digest.hexdigest()[:16]
+
+
+def _cached() -> bool:
+    """numba's cache holds the compiled function (without importing numba)."""
+    return any(_cache_dir().glob("**/*rhs_fused*.nbi"))
+
+
+def _helpers():
+    from . import coolprop_fluid, dry_air, flows, kernel
+
+    return (flows._x_eff, flows.nozzle_critical_ratio, flows._psi, flows._psi_k,
+            flows.nozzle_constants, flows.nozzle_f_c, flows.fanno_f, dry_air.table_interp,
+            coolprop_fluid.table_interp, kernel.fluid_state, kernel.nodes, kernel.upstream,
+            kernel.mass_flows, kernel.enthalpy_flows, kernel.balances, kernel.ideal_ports)
+
+
+def _compile():
+    try:
+        import numba
+        from numba.extending import register_jitable
+    except ImportError:
+        _state["failed"] = True
+        return None
+    from . import kernel
+
+    numba.config.CACHE_DIR = str(_cache_dir())
+    for fn in _helpers():
+        register_jitable(fn)
+    # error_model "numpy": a trial state's division by zero gives inf/nan (rejected by
+    # the step control) as in numpy, not an exception
+    return numba.njit(cache=True, error_model="numpy")(kernel.rhs_fused)
+
+
+def warm_up() -> None:
+    """Fill numba's cache: solve one small cycle of each fluid kind with the compiled
+    right-hand side (``python -m rotorflow.quasi1d.compiled``, ~30 s once)."""
+    from .settings import Leakage, Operating, Ports
+    from .simulate import simulate
+    from .synthetic import sin2_table
+
+    os.environ["ROTORFLOW_COMPILED"] = "1"
+    if kernel_for_point() is None:
+        raise SystemExit("numba is not installed: the model runs in numpy")
+    table = sin2_table(rows=241)
+    base = {"p_suction_bar": 1.0, "p_discharge_bar": 4.0, "T_suction_K": 300.0,
+            "speed_rpm": 3000.0, "volume_ratio": 3.0}
+    for extra, ports in (({}, Ports()), ({"heat_capacity": "constant"},
+                                         Ports(model="nozzle"))):
+        simulate(table, Operating.from_section({**base, **extra}, "warm-up"),
+                 Leakage(gap_m=10e-6, model="nozzle"), ports)
+
+
+if __name__ == "__main__":
+    warm_up()

@@ -1,0 +1,118 @@
+"""The compiled right-hand side (quasi1d.kernel.rhs_fused through quasi1d.compiled)
+against the model's numpy evaluation of the same pieces: an independent assembly (one
+compiled function against the model's piecewise calls with its own node arrays) that
+must agree to round-off on every fluid, port and leakage law it covers, and whole
+cycles that agree far inside the integration tolerance.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from rotorflow.quasi1d import Leakage, Operating, Ports, compiled, kernel, simulate
+from rotorflow.quasi1d.simulate import build_model
+from rotorflow.quasi1d.synthetic import sin2_table
+
+pytest.importorskip("numba")
+
+# Round-off of the two evaluations: the same operations, compiled (LLVM's pow and exp)
+# or in numpy, on dy of ~1e2 terms each; relative to the largest |dy| of each component
+# over the states compared.
+RHS_RTOL = 1e-11
+# Whole cycles: identical but for round-off unless a step is accepted by one and
+# rejected by the other; then they differ by the integration error, below rtol (1e-4).
+CYCLE_RTOL = 1e-5
+
+
+def _op(**kw):
+    d = {"p_suction_bar": 1.0, "p_discharge_bar": 6.0, "T_suction_K": 300.0,
+         "speed_rpm": 3000.0, "volume_ratio": 3.5}
+    d.update(kw)
+    return Operating.from_section(d, "test")
+
+
+CASES = {
+    "dry air, ideal ports, nozzle leakage": (
+        _op(), Leakage(gap_m=10e-6, model="nozzle", coefficient=0.8), Ports()),
+    "perfect gas, nozzle ports, Fanno leakage, heat transfer": (
+        _op(heat_capacity="constant", heat_transfer_W_m2K=200.0),
+        Leakage(gap_m=10e-6, model="fanno", zeta=3.0), Ports(model="nozzle")),
+    "CoolProp air table, nozzle ports, no leakage": (
+        _op(fluid="CoolProp::Air"), Leakage(model="none"),
+        Ports(model="nozzle", coefficient=1.0)),
+}
+
+
+@pytest.fixture(scope="module")
+def table():
+    return sin2_table(rows=481)
+
+
+@pytest.fixture
+def compiled_on(monkeypatch):
+    monkeypatch.setenv("ROTORFLOW_COMPILED", "1")
+    fn = compiled.kernel_for_point()
+    assert fn is not None
+    return fn
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_compiled_rhs_equals_numpy(table, compiled_on, name):
+    op, leak, ports = CASES[name]
+    model = build_model(table, op, leak, ports)
+    z = model.initial_state()
+    rng = np.random.default_rng(7)
+    y = np.repeat(z[None], 5, axis=0)
+    # perturbed states: every slot's mass and energy moved by up to 5 %
+    y[:, :2 * model.n] *= 1.0 + 0.05 * rng.uniform(-1, 1, (5, 2 * model.n))
+    checked = 0
+    for seg in model.segments:
+        if seg.end <= seg.start or not kernel.fusable(model, seg):
+            continue
+        for theta in np.linspace(seg.start, seg.end, 4)[1:-1]:
+            yy = y.copy()
+            n, na = model.n, seg.n_act
+            V = model.geo.volume(theta + seg.kP)
+            new = np.nonzero(z[:na] <= 0.0)[0]  # the newborn slot: suction gas
+            yy[:, new] = model.suc.rho * V[new]
+            yy[:, n + new] = yy[:, new] * model.suc.u
+            yy[:, na:n] = 0.0  # inactive slots hold nothing
+            yy[:, n + na:2 * n] = 0.0
+            model.fast["kernel"] = None
+            ref = model.rhs(theta, yy, seg)
+            model.fast["kernel"] = compiled_on
+            got = model.rhs(theta, yy, seg)
+            scale = np.maximum(np.max(np.abs(ref), axis=0), 1e-300)
+            assert np.max(np.abs(got - ref) / scale) < RHS_RTOL, (seg.index, theta)
+            checked += 1
+    assert checked >= 4
+
+
+@pytest.mark.parametrize("name", list(CASES)[:2])
+def test_compiled_cycle_equals_numpy(table, monkeypatch, name):
+    op, leak, ports = CASES[name]
+    monkeypatch.setenv("ROTORFLOW_COMPILED", "0")
+    ref = simulate(table, op, leak, ports).figures
+    monkeypatch.setenv("ROTORFLOW_COMPILED", "1")
+    got = simulate(table, op, leak, ports).figures
+    for key in ("mass_flow_kg_s", "indicated_power_W", "discharge_T_K"):
+        if key in ref:
+            assert got[key] == pytest.approx(ref[key], rel=CYCLE_RTOL), key
+
+
+def test_oil_and_moving_walls_stay_in_numpy(table):
+    model = build_model(table, _op(oil_mass_ratio=2.0),
+                        Leakage(gap_m=10e-6, model="nozzle", coefficient=0.8), Ports())
+    assert not any(kernel.fusable(model, seg) for seg in model.segments)
+
+
+def test_importing_the_model_does_not_load_numba():
+    code = ("import sys, rotorflow.quasi1d, rotorflow.quasi1d.model; "
+            "print('numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "False"

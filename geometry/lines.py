@@ -73,8 +73,10 @@ class Stretches:
 _FIELDS = ("a", "b", "psi_u", "step", "c_u", "c_v", "r_u", "r_v", "offset")
 
 
-def stretches(psi, points, rates, present, offset, ids, cuts=None, bridges=()) -> Stretches:
-    """The stretches of a point tabulated on the uniform grid ``psi`` (module doc)."""
+def stretches(psi, points, rates, present, offset, ids, cuts=None, bridges=(),
+              start=float("nan")) -> Stretches:
+    """The stretches of a point tabulated on the uniform grid ``psi`` (module doc);
+    ``start``: where a point present at the first node begins, before it."""
     n = len(psi)
     h = psi[1] - psi[0]
     cut = np.full(n, np.nan) if cuts is None else np.asarray(cuts, float)
@@ -89,7 +91,7 @@ def stretches(psi, points, rates, present, offset, ids, cuts=None, bridges=()) -
     next_node = np.concatenate([after[1:], [n]])
     floor = np.where(prev_node >= 0, psi[prev_node.clip(0)], -np.inf)
     ceil = np.where(next_node < n, psi[next_node.clip(max=n - 1)], np.inf)
-    left = np.concatenate([[np.nan], cut[:-1]])
+    left = np.concatenate([[start], cut[:-1]])
     lo = np.where(np.isfinite(left), np.clip(left, floor, psi),
                   np.clip(psi - 0.5 * h, psi[0], psi[-1]))
     hi = np.where(np.isfinite(cut), np.clip(cut, psi, ceil),

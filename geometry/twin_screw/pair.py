@@ -244,8 +244,7 @@ class TwinScrewPair(RotorPair):
 
     def _rolling_roots(self, lo: float, hi: float, psi: float) -> tuple[list, bool]:
         """(contacts in [lo, hi] by the pieces' rolling angles, whether every piece
-        there gives one).  A band (one rolling angle) has no contact of its own but at
-        its instant, where the caller takes the lens's middle."""
+        there gives one)."""
         male, per = self.male, len(self.male.pieces)
         found, known = [], True
         for j in range(math.floor(lo), math.ceil(hi)):
@@ -259,6 +258,10 @@ class TwinScrewPair(RotorPair):
                 known = False
                 continue
             if np.ptp(r) <= ROLLING_TOL:
+                # A band: at its instant every point of it touches (the one nearest
+                # the middle of [lo, hi] stands for it), else none does.
+                if abs(math.remainder(r[0] - psi, self.period)) <= ROLLING_TOL:
+                    found.append(float(np.clip(0.5 * (lo + hi), a, b)))
                 continue
             # psi's images within a period of the piece's angles (its span < a period).
             base = r[0] + math.remainder(psi - r[0], self.period)

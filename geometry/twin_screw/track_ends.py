@@ -71,6 +71,7 @@ def refine(pair, psi: np.ndarray, track):
         return _tip_runs(pair, psi, track)
     present, offset, ids = track.present.copy(), track.offset, track.ids.copy()
     cuts = np.full(len(psi), np.nan)
+    start = np.nan
     bridges = []
     h = psi[1] - psi[0]
     n = len(psi)
@@ -102,7 +103,10 @@ def refine(pair, psi: np.ndarray, track):
         if lo in sides:
             cuts[lo] = psi_b
         if hi in sides:
-            cuts[hi - 1] = psi_b
+            if hi > 0:
+                cuts[hi - 1] = psi_b
+            else:
+                start = psi_b
         present[lo + 1:hi] = False
         ids[min(hi, n):] += 1
         if length > 0.0 and sides == [lo, hi] and offset[lo] == offset[hi]:
@@ -112,7 +116,7 @@ def refine(pair, psi: np.ndarray, track):
     for i in np.nonzero(change & np.isnan(cuts[:-1]))[0]:
         j, k = (i, i + 1) if present[i] else (i + 1, i)
         cuts[i] = _cusp_line_cut(pair, track.points[j], track.rates[j], psi[j], psi[k])
-    return dataclasses.replace(track, present=present, ids=ids, cuts=cuts,
+    return dataclasses.replace(track, present=present, ids=ids, cuts=cuts, start=start,
                                bridges=tuple(bridges))
 
 
@@ -169,16 +173,20 @@ def _tip_runs(pair, psi, track):
     spun = np.stack([np.cos(turn) * base[0] - np.sin(turn) * base[1],
                      np.sin(turn) * base[0] + np.cos(turn) * base[1]], -1)
     cuts = np.full(n, np.nan)
+    start = np.nan
     idx = np.nonzero(inside)[0]
     if len(idx):
-        cuts[max(idx[0] - 1, 0)] = ends[0]
+        if idx[0] > 0:
+            cuts[idx[0] - 1] = ends[0]
+        else:
+            start = ends[0]  # the tip sealed before the chamber's section showed
         cuts[min(idx[-1], n - 1)] = ends[1]
     return dataclasses.replace(
         track, points=np.where(inside[:, None], axis + spun, track.points),
         rates=np.where(inside[:, None], speed * np.stack([-spun[:, 1], spun[:, 0]], -1),
                        track.rates),
         present=inside, offset=np.where(inside, beyond, 0),
-        ids=np.zeros(n, dtype=int), cuts=cuts)
+        ids=np.zeros(n, dtype=int), cuts=cuts, start=start)
 
 
 def _cusp_line_cut(pair, point, rate, psi_j: float, psi_k: float) -> float:

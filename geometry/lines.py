@@ -73,8 +73,10 @@ class Stretches:
 _FIELDS = ("a", "b", "psi_u", "step", "c_u", "c_v", "r_u", "r_v", "offset")
 
 
-def stretches(psi, points, rates, present, offset, ids, cuts=None, bridges=()) -> Stretches:
-    """The stretches of a point tabulated on the uniform grid ``psi`` (module doc)."""
+def stretches(psi, points, rates, present, offset, ids, cuts=None, bridges=(),
+              start=float("nan")) -> Stretches:
+    """The stretches of a point tabulated on the uniform grid ``psi`` (module doc);
+    ``start``: where a point present at the first node begins, before it."""
     n = len(psi)
     h = psi[1] - psi[0]
     cut = np.full(n, np.nan) if cuts is None else np.asarray(cuts, float)
@@ -83,12 +85,17 @@ def stretches(psi, points, rates, present, offset, ids, cuts=None, bridges=()) -
     k = np.arange(n)
     before = np.maximum.accumulate(np.where(present, k, -1))
     after = np.minimum.accumulate(np.where(present, k, n)[::-1])[::-1]
-    prev_node = np.concatenate([[0], before[:-1].clip(0)])
-    next_node = np.concatenate([after[1:].clip(max=n - 1), [n - 1]])
-    left = np.concatenate([[np.nan], cut[:-1]])
-    lo = np.where(np.isfinite(left), np.clip(left, psi[prev_node], psi), psi - 0.5 * h)
-    hi = np.where(np.isfinite(cut), np.clip(cut, psi, psi[next_node]), psi + 0.5 * h)
-    lo, hi = np.clip(lo, psi[0], psi[-1]), np.clip(hi, psi[0], psi[-1])
+    # Beyond the first and last present nodes a cut is bounded by nothing: the family
+    # may know the point's end a little past the table's ends.
+    prev_node = np.concatenate([[-1], before[:-1]])
+    next_node = np.concatenate([after[1:], [n]])
+    floor = np.where(prev_node >= 0, psi[prev_node.clip(0)], -np.inf)
+    ceil = np.where(next_node < n, psi[next_node.clip(max=n - 1)], np.inf)
+    left = np.concatenate([[start], cut[:-1]])
+    lo = np.where(np.isfinite(left), np.clip(left, floor, psi),
+                  np.clip(psi - 0.5 * h, psi[0], psi[-1]))
+    hi = np.where(np.isfinite(cut), np.clip(cut, psi, ceil),
+                  np.clip(psi + 0.5 * h, psi[0], psi[-1]))
     link = present[:-1] & present[1:] & (ids[:-1] == ids[1:])
     nxt = np.append(link, False)
     prv = np.insert(link, 0, False)

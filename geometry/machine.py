@@ -296,7 +296,7 @@ class SweptMachine:
         out: dict[tuple[str, int], np.ndarray] = {}
         for track in sec.tracks:
             st = stretches(sec.psi, track.points, sec.contact_rate(track), track.present,
-                           track.offset, track.ids, track.cuts, track.bridges)
+                           track.offset, track.ids, track.cuts, track.bridges, track.start)
             for d, v in line_lengths(st, self.sweep, phi).items():
                 out[(track.name, d)] = out.get((track.name, d), 0.0) + v
         return out

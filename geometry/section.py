@@ -47,6 +47,8 @@ class Track:
     #: changes, where the family knows it; NaN (or None): halfway, each node's point
     #: standing for its half step.
     cuts: np.ndarray | None = None
+    #: Where a point present at node 0 begins, before it (NaN: half a step before).
+    start: float = float("nan")
     #: (psi, length, offset) of lines across the section: where the point jumps along
     #: a band of contact (the rotors touch along an arc at that instant), the line the
     #: swept point misses.

@@ -80,7 +80,8 @@ def test_chamber_lines_add_up_to_the_contact_line(profile):
     sec = m.section
     bare = {}
     for t in sec.tracks:
-        st = stretches(sec.psi, t.points, t.rates, t.present, t.offset, t.ids, t.cuts)
+        st = stretches(sec.psi, t.points, t.rates, t.present, t.offset, t.ids, t.cuts,
+                       start=t.start)
         for d, v in line_lengths(st, sweep, m.curves.phi).items():
             bare[(t.name, d)] = bare.get((t.name, d), 0.0) + v
     fold, fold_bare = _fold(m, ppp, m.track_lines), _fold(m, ppp, bare)

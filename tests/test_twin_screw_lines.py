@@ -103,7 +103,7 @@ def test_lines_are_the_integral_of_their_stretches(sweep):
     sec = examples()["line-circle-4-6"].section(48)
     track = next(t for t in sec.tracks if t.name == "interlobe-lead")
     st = stretches(sec.psi, track.points, track.rates, track.present, track.offset,
-                   track.ids, track.cuts)
+                   track.ids, track.cuts, start=track.start)
     phi = sec.psi[0] + np.array([0.7, 4.1, 8.2])
     lines = line_lengths(st, sweep, phi)
 

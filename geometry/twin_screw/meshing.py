@@ -166,6 +166,9 @@ class OnRotor:
     arc: object
     rotor: str
     reverse: bool = False
+    #: Given for a male arc, the male angle at which each of its points is in contact
+    #: (:meth:`rolling_angle`) is known, and the contact's joints and bands with it.
+    gearing: Gearing | None = None
 
     @property
     def name(self) -> str:
@@ -179,7 +182,16 @@ class OnRotor:
         return self.eval(t, 1)
 
     def rolling_angle(self, t):
-        return np.full(np.shape(t), np.nan)
+        """The male angle at which the point of parameter t is in contact: the meshing
+        condition's root that brings the arc's middle nearer the pitch point (as for the
+        female arc it generates, :class:`MaleGenerated`); NaN on a female arc, or a male
+        one given no gearing (its contact's joints are then not located)."""
+        if self.rotor != "male" or self.gearing is None:
+            return np.full(np.shape(t), np.nan)
+        try:
+            return MaleGenerated(self.arc, self.gearing, self.reverse).rolling_angle(t)
+        except CaseError:  # a normal that misses the pitch circle: no contact there
+            return np.full(np.shape(t), np.nan)
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.optimize import minimize_scalar
+from scipy.optimize import brentq, minimize_scalar
 
 from rotorflow.errors import CaseError
 
@@ -42,6 +42,23 @@ CONTACT_LINE_SAMPLES = 24
 LAW_STEP = 1e-6
 #: Parameter tolerance of a contact: 1e-13 of a piece is far below a nanometre.
 CONTACT_XTOL = 1e-13
+#: A root of the law of gearing leaves at most this residual (per C): the law's slope
+#: is ~C per unit parameter, so CONTACT_XTOL leaves ~1e-13; a bracket closed on a jump
+#: of the law (a cusp's normal flip) leaves the jump, ~1e-4 and more.
+ROOT_RESIDUAL = 1e-9
+#: A zero of the law on a piece whose rolling angle is known is its contact only if
+#: that angle is psi (mod a period) to this (rad): the law's zero is found to 1e-13 of
+#: a piece, the rolling angle varies by at most ~1 rad per piece (more near a cusp's
+#: sqrt(s) parametrisation, still far below this); a spurious zero lies ~1e-2 off.
+ROLLING_TOL = 1e-6
+#: Points per piece on which its rolling angle is bracketed (monotone on the pieces
+#: seen; a few more guard a turning one).
+ROLLING_SCAN = 9
+#: Either side of a jump of the law, this far (in profile parameter) ...
+CORNER_STEP = 1e-9
+#: ... the normals of a cusp are opposite (cos -1); a corner's turn by less than
+#: ~170 deg is a corner.
+CUSP_COS = -0.985
 
 
 def _illinois(f, a, b, fa, fb, iterations: int = 60) -> float:
@@ -67,6 +84,10 @@ def _illinois(f, a, b, fa, fb, iterations: int = 60) -> float:
         if abs(b - a) < CONTACT_XTOL:
             break
     return float(c)
+
+
+def _offset_rolling(t: float, piece, target: float) -> float:
+    return float(np.asarray(piece.rolling_angle(np.array([t])))[0]) - target
 
 
 @dataclass(frozen=True)
@@ -206,16 +227,103 @@ class TwinScrewPair(RotorPair):
         return cross(male.normal(u), pitch - male.point(u))
 
     def _root(self, lo: float, hi: float, near: float, psi: float) -> float | None:
-        """The root of the law in [lo, hi] nearest ``near`` (None if it has none)."""
+        """The contact on the male in [lo, hi] (profile parameter) nearest ``near`` at
+        male angle psi (None if it has none there).
+
+        Where the pieces give their rolling angles the contact is where that angle is
+        psi (:meth:`_rolling_roots`), or a corner the contact rests on.  Elsewhere it is
+        a root of the law of gearing, which is weaker near a cusp: there the normals of
+        nearby points also pass through the pitch point (the evolute is near) and
+        zeros come in close pairs that a coarse bracket misses."""
+        found, known = self._rolling_roots(lo, hi, psi)
+        if not known:
+            found += self._law_roots(lo, hi, psi)
+        if not found:
+            return None
+        return float(np.mod(min(found, key=lambda u: abs(u - near)), self.male.n))
+
+    def _rolling_roots(self, lo: float, hi: float, psi: float) -> tuple[list, bool]:
+        """(contacts in [lo, hi] by the pieces' rolling angles, whether every piece
+        there gives one)."""
+        male, per = self.male, len(self.male.pieces)
+        found, known = [], True
+        for j in range(math.floor(lo), math.ceil(hi)):
+            a, b = max(lo, j), min(hi, j + 1)
+            if b <= a:
+                continue
+            piece = male.pieces[j % per]
+            t = np.linspace(a - j, b - j, ROLLING_SCAN)
+            r = np.asarray(piece.rolling_angle(t), dtype=float)
+            if not np.all(np.isfinite(r)):
+                known = False
+                continue
+            if np.ptp(r) <= ROLLING_TOL:
+                # A band: at its instant every point of it touches (the one nearest
+                # the middle of [lo, hi] stands for it), else none does.
+                if abs(math.remainder(r[0] - psi, self.period)) <= ROLLING_TOL:
+                    found.append(float(np.clip(0.5 * (lo + hi), a, b)))
+                continue
+            # psi's images within a period of the piece's angles (its span < a period).
+            base = r[0] + math.remainder(psi - r[0], self.period)
+            for target in (base - self.period, base, base + self.period):
+                g = r - target
+                for i in np.nonzero(np.sign(g[:-1]) != np.sign(g[1:]))[0]:
+                    found.append(j + brentq(_offset_rolling, t[i], t[i + 1],
+                                            args=(piece, target), xtol=CONTACT_XTOL))
+                found.extend(j + t[np.nonzero(g == 0.0)[0]])
+        for k in range(math.ceil(lo), math.floor(hi) + 1):
+            if self._rests(float(k), psi, strict=True):
+                found.append(float(k))
+        return found, known
+
+    def _law_roots(self, lo: float, hi: float, psi: float) -> list:
+        """Roots of the law of gearing in [lo, hi], where the pieces give no rolling
+        angle."""
         grid = np.linspace(lo, hi, CONTACT_GRID)
+        # The law jumps at the joints between pieces (the normal turns there): each joint
+        # gets its own bracket, so that a zero just beside it is not cancelled by it.
+        joints = np.arange(math.ceil(lo), math.floor(hi) + 1, dtype=float)
+        grid = np.unique(np.concatenate([grid, joints - CORNER_STEP, joints + CORNER_STEP]))
+        grid = grid[(grid >= lo) & (grid <= hi)]
         vals = self._law(grid, psi)
         sign = np.nonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[0]
-        if not len(sign):
-            return None
-        j = int(sign[np.argmin(np.abs(grid[sign] - near))])
         law = lambda u: self._law(u, psi)  # noqa: E731
-        return float(np.mod(_illinois(law, grid[j], grid[j + 1], vals[j], vals[j + 1]),
-                            self.male.n))
+        out = []
+        # The law also changes sign where the male's normal jumps.  At a corner that is
+        # a contact: the corner seals while the normal's turn there sweeps through the
+        # pitch point.  At a cusp the normal flips and the sign change is none.
+        for j in sign:
+            u = _illinois(law, grid[j], grid[j + 1], vals[j], vals[j + 1])
+            if abs(float(law(u)[0])) <= ROOT_RESIDUAL * self.gearing.centre_distance:
+                out.append(u)
+                continue
+            side = self.male.normal(np.mod(np.array([u - CORNER_STEP, u + CORNER_STEP]),
+                                           self.male.n))
+            if float(side[0] @ side[1]) > CUSP_COS:
+                out.append(u)
+        return out
+
+    def _rolling(self, u: float) -> float:
+        """The rolling angle of male point u (its piece's; NaN where it gives none)."""
+        male = self.male
+        v = float(np.mod(u, male.n))
+        j = min(int(np.floor(v)), male.n - 1)
+        k = j % len(male.pieces)
+        return float(np.asarray(male.pieces[k].rolling_angle(np.array([v - j])))[0])
+
+    def _rests(self, u: float, psi: float, strict: bool = False) -> bool:
+        """Whether the contact rests on the male corner u at angle psi: strictly between
+        the instants the pieces either side mesh their ends there (where those differ;
+        the ends themselves are the pieces' contacts)."""
+        a, b = self._rolling(u - CORNER_STEP), self._rolling(u + CORNER_STEP)
+        if not (math.isfinite(a) and math.isfinite(b)):
+            return not strict
+        span = math.remainder(b - a, self.period)
+        if strict and abs(span) <= ROLLING_TOL:
+            return False
+        x = math.remainder(psi - a, self.period)
+        lo, hi = min(0.0, span), max(0.0, span)
+        return lo - ROLLING_TOL <= x <= hi + ROLLING_TOL
 
     def contact_near(self, x, psi: float) -> tuple[np.ndarray, np.ndarray]:
         """(point, d point / d psi) of the contact of the rotors near ``x`` at male
@@ -244,6 +352,11 @@ class TwinScrewPair(RotorPair):
         uhi = float(u_poly[hi]) + (male.n if hi < lo else 0.0)
         mid = 0.5 * (ulo + uhi)
         u = self._root(ulo, uhi, mid, psi)
+        if u is None:
+            # Just off a band's instant the lens can lie along the band's arc while the
+            # contact has passed onto the next piece, beyond the lens's end (the
+            # pin-cycloid's pin arc and the female corner D1): look a window further.
+            u = self._root(ulo - CONTACT_WINDOW, uhi + CONTACT_WINDOW, mid, psi)
         if u is None:
             # No root in the lens (a conformal band at its tangency): its middle, with
             # no rate of its own (the band is not a sealing point that moves).

@@ -108,9 +108,9 @@ def pin_cycloid_pair(gearing: Gearing, pin_radius: float) -> tuple[TwinProfile, 
                         f"female lobe ({360.0 / g.lobes_female:.2f} deg), so no land is left")
     male = TwinProfile("male", (
         OnRotor(CircleArc("male root", (0.0, 0.0), r1, -theta_d - TWO_PI / g.lobes_male,
-                          -theta_1), "male"),
+                          -theta_1), "male", gearing=g),
         PointTrace("pin-side corner D1", tuple(d1), g, "female", theta_1, 0.0, cusp="start"),
-        OnRotor(CircleArc("pin arc", (r1, 0.0), r, beta, 0.0), "male"),
+        OnRotor(CircleArc("pin arc", (r1, 0.0), r, beta, 0.0), "male", gearing=g),
         PointTrace("trochoid-side corner D2", tuple(d2), g, "female", theta_t, theta_d,
                    cusp="end"),
     ), g.lobes_male)

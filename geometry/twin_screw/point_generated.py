@@ -85,10 +85,22 @@ class PointTrace:
         return -(wa * wa) * a - (wb * wb) * b
 
     def rolling_angle(self, t):
-        """No rolling angle is given for a point-generated arc (as for a primary arc on a
-        rotor, :class:`.meshing.OnRotor`): the bands and joints of its contact are not
-        bridged (:func:`.track_ends.contact_breaks`)."""
-        return np.full(np.shape(t), np.nan)
+        """The male angle at which the point of parameter t is in contact: the trace's
+        own parameter theta (the generating point is the contact), on a male arc traced
+        by a female point; NaN on a female arc (the contact's joints are sought on the
+        male, :func:`.track_ends.contact_breaks`)."""
+        if self.carrier == "male":
+            return np.full(np.shape(t), np.nan)
+        return self._theta(np.asarray(t, dtype=float))
+
+    def _theta(self, t):
+        """The male angle theta at parameter t (module docstring: sqrt(s) at a cusp)."""
+        span = self.angle1 - self.angle0
+        if self.cusp is None:
+            return self.angle0 + t * span
+        if self.cusp == "start":
+            return self.angle0 + span * np.sqrt(np.clip(t, 0.0, None))
+        return self.angle1 - span * np.sqrt(np.clip(1.0 - t, 0.0, None))
 
     def eval(self, t, order: int = 0):
         t = np.asarray(t, dtype=float)

@@ -48,6 +48,9 @@ CUT_MEMO = 512
 #: A track point that moves more than this many times its median step between two
 #: nodes has jumped to another contact (a new identity, no rate across it).
 JUMP_FACTOR = 8.0
+#: Absent nodes inside a track filled by its cubic (:func:`_holes`): one or two were
+#: seen near the cusps on the pin-cycloid.
+HOLE_NODES = 3
 
 
 def _beta0(pair) -> float:
@@ -236,7 +239,7 @@ def _assemble(pair, psi0, ppp, nodes) -> SectionChamber:
     perim = np.array([nodes[k]["perimeter"] if k in nodes else np.zeros(2) for k in idx])
     psi = psi0 + h * idx
     tracks = [refine(pair, psi, t) for t in
-              _tracks([nodes[k]["seals"] if k in nodes else [] for k in idx], n)]
+              _tracks([nodes[k]["seals"] if k in nodes else [] for k in idx], n, h)]
     tracks = tuple(t for t in tracks if t.present.any())
     openings = build_openings(pair, psi, [nodes[k]["openings"] if k in nodes else []
                                           for k in idx], tracks)
@@ -252,26 +255,82 @@ def _assemble(pair, psi0, ppp, nodes) -> SectionChamber:
     )
 
 
-def _tracks(seals_per_node, n) -> tuple[Track, ...]:
-    """One Track per sealing-point name (a second point of one name at one node, such
-    as a second interlobe contact, gets a name of its own: ``name#2``)."""
+def _tracks(seals_per_node, n, h) -> tuple[Track, ...]:
+    """One Track per sealing-point name; where one chamber has two points of one name at
+    once (a second interlobe contact), the second gets a name of its own, ``name#2``.
+
+    Which point continues which track goes by continuity, not by position: each point
+    takes the track whose point at the node before, moved on by its rate over the step
+    ``h``, lies nearest (the points of one name may swap their order across the
+    section as they move).  A point that changed tracks would end one line and begin
+    another half a step off, an error of the first order in the step."""
     by_name = defaultdict(lambda: (np.zeros((n, 2)), np.zeros(n, bool), np.zeros(n, int),
                                    np.zeros((n, 2))))
     kinds = {}
+    slots = defaultdict(list)  # name -> its tracks' keys, in order of creation
     for i, seals in enumerate(seals_per_node):
-        count = defaultdict(int)
-        for name, kind, point, offset, rate in sorted(seals, key=lambda s: (s[0], s[2][1])):
-            count[name] += 1
-            key = name if count[name] == 1 else f"{name}#{count[name]}"
-            pts, present, off, rates = by_name[key]
-            pts[i], present[i], off[i], rates[i] = point, True, offset, rate
-            kinds[key] = kind
+        groups = defaultdict(list)
+        for seal in sorted(seals, key=lambda s: (s[0], s[2][1])):
+            groups[seal[0]].append(seal)
+        for name, items in groups.items():
+            keys = slots[name]
+            # Tracks present at the node before, with where their point would be now.
+            live = [(k, by_name[k][0][i - 1] + h * by_name[k][3][i - 1]) for k in keys
+                    if i > 0 and by_name[k][1][i - 1]]
+            pairs = sorted((float(np.linalg.norm(seal[2] - guess)), a, k)
+                           for a, seal in enumerate(items) for k, guess in live)
+            chosen, used = {}, set()
+            for _, a, k in pairs:
+                if a not in chosen and k not in used:
+                    chosen[a] = k
+                    used.add(k)
+            for a in range(len(items)):
+                if a in chosen:
+                    continue
+                free = [k for k in keys if k not in used and k not in dict(live)]
+                if not free:
+                    free = [name if not keys else f"{name}#{len(keys) + 1}"]
+                    keys.append(free[0])
+                chosen[a] = free[0]
+                used.add(free[0])
+            for a, (_, kind, point, offset, rate) in enumerate(items):
+                pts, present, off, rates = by_name[chosen[a]]
+                pts[i], present[i], off[i], rates[i] = point, True, offset, rate
+                kinds[chosen[a]] = kind
     out = []
     for name in sorted(by_name):
-        pts, present, off, rates = by_name[name]
+        pts, present, off, rates = _holes(*by_name[name], h)
         out.append(Track(name, kinds[name], *_fill(pts, present), off, _ids(pts, present),
                          rates=rates))
     return tuple(out)
+
+
+def _holes(pts, present, off, rates, h):
+    """Fill a run of at most HOLE_NODES absent nodes between two present ones of the
+    same chamber beyond whose points the cubic through both (their rates) joins within
+    JUMP_FACTOR steps: the section lost the point there (the sliver beyond a contact
+    near a cusp is below the polygons' resolution), the line did not stop."""
+    pts, present, off, rates = pts.copy(), present.copy(), off.copy(), rates.copy()
+    idx = np.nonzero(present)[0]
+    if len(idx) < 2:
+        return pts, present, off, rates
+    steps = np.linalg.norm(np.diff(pts[idx], axis=0), axis=-1)[np.diff(idx) == 1]
+    typical = np.median(steps) if len(steps) else 0.0
+    for i, j in zip(idx[:-1], idx[1:], strict=True):
+        if not 1 < j - i <= HOLE_NODES + 1 or off[i] != off[j]:
+            continue
+        span = (j - i) * h
+        if np.linalg.norm(pts[j] - pts[i]) > JUMP_FACTOR * (j - i) * max(typical, 1e-300):
+            continue
+        s = (np.arange(i + 1, j) - i)[:, None] / (j - i)
+        s2, s3 = s * s, s * s * s
+        pts[i + 1:j] = ((2 * s3 - 3 * s2 + 1) * pts[i] + (s3 - 2 * s2 + s) * span * rates[i]
+                        + (3 * s2 - 2 * s3) * pts[j] + (s3 - s2) * span * rates[j])
+        rates[i + 1:j] = ((6 * s2 - 6 * s) * (pts[i] - pts[j]) / span
+                          + (3 * s2 - 4 * s + 1) * rates[i] + (3 * s2 - 2 * s) * rates[j])
+        present[i + 1:j] = True
+        off[i + 1:j] = off[i]
+    return pts, present, off, rates
 
 
 def _fill(pts, present):

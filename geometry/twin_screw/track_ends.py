@@ -53,6 +53,12 @@ BAND_GAUSS = 16
 BAND_SHADOW = 2.0
 #: A node this near a joint's instant (rad) is at the joint: its rate is either arc's.
 JOINT_NODE = 1e-9
+#: Absent nodes a track may have lost next to an event it begins or ends at (a sliver
+#: below the polygons' resolution near a cusp; two were seen on the pin-cycloid).
+EVENT_REACH = 3
+#: Two joints within this (rad, and per C in position) are one: where a piece ends and
+#: the next begins (closed forms agree to ~1e-13).
+SAME_EVENT = 1e-9
 #: Newton's steps for a contact's crossing of the cusp line, and the angle (rad) within
 #: which it is found: the contact's rate is exact, so three or four steps reach 1e-13.
 NEWTON_STEPS = 30
@@ -65,34 +71,66 @@ def refine(pair, psi: np.ndarray, track):
         return _tip_runs(pair, psi, track)
     present, offset, ids = track.present.copy(), track.offset, track.ids.copy()
     cuts = np.full(len(psi), np.nan)
+    start = np.nan
     bridges = []
     h = psi[1] - psi[0]
+    n = len(psi)
     for psi_b, length, mid, shadow in _breaks(pair, psi):
         before = np.nonzero(psi <= psi_b - shadow)[0]
         after = np.nonzero(psi >= psi_b + shadow)[0]
-        if not (len(before) and len(after)):
-            continue
-        lo, hi = int(before[-1]), int(after[0])
-        if not (present[lo] and present[hi]) or offset[lo] != offset[hi]:
-            continue
-        reach = 0.5 * length + 2.0 * (h + shadow) * np.linalg.norm(track.rates[[lo, hi]],
-                                                                   axis=-1)
-        if np.any(np.linalg.norm(track.points[[lo, hi]] - mid, axis=-1) > reach):
+        lo = int(before[-1]) if len(before) else -1
+        hi = int(after[0]) if len(after) else n
+        # Nodes in the shadow that hold a point of the band (its middle, where no
+        # contact was found) stand for nothing, whatever the nodes either side.
+        shadowed = np.arange(lo + 1, hi)
+        near = np.linalg.norm(track.points[shadowed] - mid, axis=-1) <= 0.5 * length + h * (
+            np.linalg.norm(track.rates[shadowed], axis=-1))
+        present[shadowed[near]] = False
+        # A track that ends (begins) at the event may have lost its last (first) nodes
+        # before it: near a cusp the sliver beyond the contact is below the polygons'
+        # resolution.  Its nearest node within EVENT_REACH steps stands for it.
+        lo = _nearest_present(track.present, lo, -1)
+        hi = _nearest_present(track.present, hi, 1)
+        # The sides on which the track has this contact there: it may begin or end at
+        # the event (a chamber born at a band), or change its chamber beyond.
+        sides = [j for j in (lo, hi) if 0 <= j < n and track.present[j]
+                 and np.linalg.norm(track.points[j] + (psi_b - psi[j]) * track.rates[j] - mid)
+                 <= 0.5 * length + 2.0 * (h + shadow) * np.linalg.norm(track.rates[j])]
+        if not sides:
             continue  # this chamber's contact is elsewhere
         # The stretches either side end there (no rate is interpolated across), and
         # nodes in its shadow stand for nothing.
-        cuts[lo] = cuts[hi - 1] = psi_b
+        if lo in sides:
+            cuts[lo] = psi_b
+        if hi in sides:
+            if hi > 0:
+                cuts[hi - 1] = psi_b
+            else:
+                start = psi_b
         present[lo + 1:hi] = False
-        ids[hi:] += 1
-        if length > 0.0:
+        ids[min(hi, n):] += 1
+        if length > 0.0 and sides == [lo, hi] and offset[lo] == offset[hi]:
             bridges.append((float(psi_b), length, int(offset[hi])))
     change = (present[:-1] != present[1:]) | (present[:-1] & present[1:]
                                               & (offset[:-1] != offset[1:]))
     for i in np.nonzero(change & np.isnan(cuts[:-1]))[0]:
         j, k = (i, i + 1) if present[i] else (i + 1, i)
         cuts[i] = _cusp_line_cut(pair, track.points[j], track.rates[j], psi[j], psi[k])
-    return dataclasses.replace(track, present=present, ids=ids, cuts=cuts,
+    return dataclasses.replace(track, present=present, ids=ids, cuts=cuts, start=start,
                                bridges=tuple(bridges))
+
+
+def _nearest_present(present, j: int, step: int) -> int:
+    """Node j if the track is there, else its nearest node that is, going ``step`` (+-1)
+    over absent nodes only, at most EVENT_REACH of them; j if none."""
+    n = len(present)
+    for k in range(EVENT_REACH + 1):
+        i = j + step * k
+        if not 0 <= i < n:
+            return j
+        if present[i]:
+            return i
+    return j
 
 
 def _tip_runs(pair, psi, track):
@@ -135,16 +173,20 @@ def _tip_runs(pair, psi, track):
     spun = np.stack([np.cos(turn) * base[0] - np.sin(turn) * base[1],
                      np.sin(turn) * base[0] + np.cos(turn) * base[1]], -1)
     cuts = np.full(n, np.nan)
+    start = np.nan
     idx = np.nonzero(inside)[0]
     if len(idx):
-        cuts[max(idx[0] - 1, 0)] = ends[0]
+        if idx[0] > 0:
+            cuts[idx[0] - 1] = ends[0]
+        else:
+            start = ends[0]  # the tip sealed before the chamber's section showed
         cuts[min(idx[-1], n - 1)] = ends[1]
     return dataclasses.replace(
         track, points=np.where(inside[:, None], axis + spun, track.points),
         rates=np.where(inside[:, None], speed * np.stack([-spun[:, 1], spun[:, 0]], -1),
                        track.rates),
         present=inside, offset=np.where(inside, beyond, 0),
-        ids=np.zeros(n, dtype=int), cuts=cuts)
+        ids=np.zeros(n, dtype=int), cuts=cuts, start=start)
 
 
 def _cusp_line_cut(pair, point, rate, psi_j: float, psi_k: float) -> float:
@@ -183,10 +225,13 @@ def _breaks(pair, psi):
     meshes within the table's span ``psi``: one of phase a meshes at a + k period (lobe
     -k then meets the female where lobe 0 does at a, at the same fixed point)."""
     period = TWO_PI / pair.gearing.lobes_male
+    # A chamber's first and last sealing points can lie a little beyond its table's
+    # ends (the sliver there is below the polygons' resolution): EVENT_REACH steps.
+    reach = EVENT_REACH * (psi[1] - psi[0])
     out = []
     for phase, length, point, shadow in pair.contact_breaks:
-        k0 = math.ceil((psi[0] - phase) / period)
-        k1 = math.floor((psi[-1] - phase) / period)
+        k0 = math.ceil((psi[0] - reach - phase) / period)
+        k1 = math.floor((psi[-1] + reach - phase) / period)
         out.extend((phase + k * period, length, point, shadow) for k in range(k0, k1 + 1))
     return out
 
@@ -194,25 +239,28 @@ def _breaks(pair, psi):
 def contact_breaks(pair) -> tuple:
     """(male angle of contact, bridge length inside both bores, point in the fixed frame
     at that angle, shadow) of every band and joint of the male's lobe 0 (module
-    docstring); a band's point is its middle."""
+    docstring); a band's point is its middle.
+
+    A joint is either end of a piece that is not a band: there the contact passes to
+    the next piece, or comes to rest on a corner of either rotor (the pin-cycloid's male
+    tip seals while the female's flank it generates meshes) until the next piece's
+    first point meshes; either way its rate jumps.  An end that meshes at a band's
+    instant is the band's (its cuts end the stretches there)."""
     g = pair.gearing
+    period = TWO_PI / g.lobes_male
     t = np.linspace(0.0, 1.0, BAND_SAMPLES)
     x, w = np.polynomial.legendre.leggauss(BAND_GAUSS)
     tg = 0.5 * (x + 1.0)
     shadow = BAND_SHADOW * math.sqrt(4.0 * GROW * g.r2 / g.r1)
-    out = []
-    pieces = pair.male.pieces
-    for k, piece in enumerate(pieces):
+    bands, ends = [], []
+    for piece in pair.male.pieces:
         rolling = np.asarray(piece.rolling_angle(t), dtype=float)
         if not np.all(np.isfinite(rolling)):
             continue
         if np.ptp(rolling) > BAND_TOL:
-            # A joint with the next arc, unless that one is a band (its instant).
-            nxt = np.asarray(pieces[(k + 1) % len(pieces)].rolling_angle(t), dtype=float)
-            if np.all(np.isfinite(nxt)) and np.ptp(nxt) > BAND_TOL:
-                end = float(rolling[-1])
-                out.append((end, 0.0, piece.eval(np.array([1.0]), 0)[0] @ _turn(end).T,
-                            JOINT_NODE))
+            for angle, end in ((rolling[0], 0.0), (rolling[-1], 1.0)):
+                point = piece.eval(np.array([end]), 0)[0] @ _turn(float(angle)).T
+                ends.append((float(angle), 0.0, point, JOINT_NODE))
             continue
         phase = float(rolling.mean())
         # At that instant the arc lies on its mate in the fixed frame: turned by phase.
@@ -224,7 +272,16 @@ def contact_breaks(pair) -> tuple:
                      <= pair.female_radius * (1.0 + BAND_TOL)))
         length = float(np.sum(0.5 * w * np.linalg.norm(piece.eval(tg, 1), axis=-1) * inside))
         if length > 0.0:
-            out.append((phase, length, piece.eval(np.array([0.5]), 0)[0] @ turn.T, shadow))
+            bands.append((phase, length, piece.eval(np.array([0.5]), 0)[0] @ turn.T, shadow))
+    out = list(bands)
+    tol = SAME_EVENT * g.centre_distance
+    for e in ends:
+        if any(abs(math.remainder(e[0] - b[0], period)) < SAME_EVENT for b in bands):
+            continue
+        if any(abs(math.remainder(e[0] - o[0], period)) < SAME_EVENT
+               and np.linalg.norm(e[2] - o[2]) < tol for o in out):
+            continue  # one piece's end is the next one's start
+        out.append(e)
     return tuple(out)
 
 

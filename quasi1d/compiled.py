@@ -20,6 +20,7 @@ the helpers it inlines from the fluid and flow modules.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import inspect
 import os
@@ -55,6 +56,7 @@ def kernel_for_point():
     return _state["kernel"]
 
 
+@functools.lru_cache(maxsize=1)
 def _cache_dir() -> Path:
     from . import kernel
 

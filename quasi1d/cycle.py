@@ -25,7 +25,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import compiled
 from .integrate import IntegrationError, PeriodRun, integrate_period
 from .model import ChamberModel
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_M_DIS, ACC_M_SUC, ACC_Q, ACC_W
@@ -134,6 +133,8 @@ def _damped(model, best, idx, lam):
 
 
 def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolution:
+    from . import compiled  # (not at import: `python -m rotorflow.quasi1d.compiled`)
+
     cpu = time.process_time()
     model.fast["kernel"] = compiled.kernel_for_point()  # None: numpy (see .compiled)
     try:

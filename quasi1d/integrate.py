@@ -228,28 +228,12 @@ def _jacobian(model, seg, t, y, f0, atol):
         return None, None
     J = np.zeros((B, S, S))
     J[:, :, cols] = np.swapaxes((F - f0[:, None, :]) / delta[:, :, None], 1, 2)
-    return (J, cols), (ft - f0) / JAC_T_STEP
-
-
-def _w_inverse(J, cols, hd):
-    """(I - hd J)^-1 of every batch member where only the columns ``cols`` of J are
-    non-zero: ordering those first, I - hd J = [[A, 0], [-hd J_oc, I]] with
-    A = I - hd J_cc, whose inverse is [[A^-1, 0], [hd J_oc A^-1, I]]; so only the
-    (nc, nc) block A is inverted (a chamber's states, not the accumulators)."""
-    B, S, _ = J.shape
-    other = np.setdiff1d(np.arange(S), cols)
-    Ai = np.linalg.inv(np.eye(cols.size) - hd * J[:, cols[:, None], cols])
-    Wi = np.zeros((B, S, S))
-    Wi[:, other, other] = 1.0
-    Wi[:, cols[:, None], cols] = Ai
-    Wi[:, other[:, None], cols] = hd * (J[:, other[:, None], cols] @ Ai)
-    return Wi
+    return J, (ft - f0) / JAC_T_STEP
 
 
 def _ros23_step(model, seg, t, y, h, F0, run):
     jac = run.jac
-    if (jac is None or jac[0] is not seg or jac[1] >= JAC_REUSE
-            or jac[2][0].shape[0] != y.shape[0]):
+    if jac is None or jac[0] is not seg or jac[1] >= JAC_REUSE or jac[2].shape[0] != y.shape[0]:
         J, T = _jacobian(model, seg, t, y, F0, run.atol)
         run.jac = None if J is None else [seg, 0, J, T]
     else:
@@ -259,7 +243,7 @@ def _ros23_step(model, seg, t, y, h, F0, run):
     if J is None or not np.all(np.isfinite(F0)):
         return y, F0, np.full_like(y, np.inf)
     try:
-        Wi = _w_inverse(*J, h * _D)  # (B, S, S)
+        Wi = np.linalg.inv(np.eye(y.shape[1]) - (h * _D) * J)  # (B, S, S)
     except np.linalg.LinAlgError:
         return y, F0, np.full_like(y, np.inf)
 

@@ -6,8 +6,14 @@ Every function here is plain numpy on arrays of the batch (B, ...) and also comp
 with numba (:mod:`.compiled`): the model calls these functions uncompiled, piece by
 piece, with its other terms (calibrated or rarefied leakage, moving walls, oil) in
 between; where a segment has none of those, the compiled :func:`rhs_fused` evaluates
-the same pieces in one call, ~20 times faster than the numpy calls on a few dozen
-numbers each.  So each piece of physics is written once.
+the same pieces in one call.  So each piece of physics is written once.
+
+Measured on the default case (8 slots, 52 flows of which ~24 open): 31 us a call
+against ~120 us in numpy for the cycle solver's batch of 15 states; 16 against 55 us
+with nozzle ports and no leakage (7 flows); no faster than numpy for the 240 states of a
+Rosenbrock Jacobian, where numpy's vectorised power function outruns numba's scalar one.
+The rest of a compiled call is the numba versions of the gathers (~1.4 ns an element),
+the powers of the nozzle formula (~10 ns) and five small matrix products (~1.5 us each).
 """
 
 from __future__ import annotations

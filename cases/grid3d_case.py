@@ -37,6 +37,7 @@ from .foam_dicts import (
 )
 from .foam_files import write_dict, write_field
 from .grid3d_quality import stack_nodes
+from .grid3d_zones import find_zones, write_zones
 from .ogrid import OGridSpec
 from .polymesh import build_polymesh, helical_stack, write_mesh
 
@@ -114,14 +115,21 @@ def end_labels(polygons: dict[str, list[np.ndarray]]):
     return name
 
 
-def _control_dict(case: Frozen3DCase, patches: list[str]) -> dict[str, Any]:
-    flux = {f"flow_{p}": field_value("surfaceFieldValue", "patch", "sum", ["phi"],
-                                     write_control="timeStep", write_interval=1, name=p)
-            for p in patches}
+def _control_dict(case: Frozen3DCase, patches: list[str], zones: dict) -> dict[str, Any]:
+    every = {"write_control": "timeStep", "write_interval": 1}
+    functions = {f"flow_{p}": field_value("surfaceFieldValue", "patch", "sum", ["phi"],
+                                          name=p, **every) for p in patches}
+    for zone in zones:
+        if zone.startswith("chamber"):
+            functions[f"pressure_{zone}"] = field_value(
+                "volFieldValue", "cellZone", "volAverage", ["p"], name=zone, **every)
+        else:
+            functions[f"flow_{zone}"] = field_value(
+                "surfaceFieldValue", "faceZone", "sum", ["phi"], name=zone, **every)
     return control_dict(
         SOLVER, start_from="latestTime", end_time=case.iterations, delta_t=1,
         write_control="timeStep", write_interval=case.iterations, purge_write=1,
-        time_precision=8, run_time_modifiable=False, functions=flux)
+        time_precision=8, run_time_modifiable=False, functions=functions)
 
 
 def _fv_solution() -> dict[str, Any]:
@@ -192,14 +200,28 @@ def write_case(case: Frozen3DCase, case_dir: Path) -> dict:
         if port not in patches:
             raise CaseError(f"no end face of the grid at {math.degrees(case.phi):.4g} deg "
                             f"lies in the {port} port")
+    X = stack_nodes(sections, z)
+    found = find_zones(X, case.gap, mesh)
+    zones = write_zones(case_dir, found)
+    counts["zones"] = zones
+    # The area through which each chamber opens to each port (the rest are closed).
+    pts, faces, owner = mesh[0], mesh[1], mesh[2]
+    counts["open_to"] = {}
+    for name, _, start, count in mesh[4]:
+        if name in PORTS:
+            q = pts[faces[start:start + count]]
+            area = 0.5 * np.linalg.norm(np.cross(q[:, 2] - q[:, 0], q[:, 3] - q[:, 1]), axis=1)
+            c = found.chamber[owner[start:start + count]]
+            counts["open_to"][name] = {f"chamber{k}": float(area[c == k].sum())
+                                       for k in np.unique(c)}
     system, constant = case_dir / "system", case_dir / "constant"
-    write_dict(system / "controlDict", _control_dict(case, patches))
+    write_dict(system / "controlDict", _control_dict(case, patches, zones))
     write_dict(system / "fvSchemes", _fv_schemes())
     write_dict(system / "fvSolution", _fv_solution())
     write_dict(system / "fvOptions", _limits(case))
     write_dict(constant / "thermophysicalProperties", thermophysical_properties(case.gas))
     write_dict(constant / "turbulenceProperties", turbulence_properties("laminar"))
-    p_init = initial_pressure(stack_nodes(sections, z), mesh, {
+    p_init = initial_pressure(X, mesh, {
         "suction": case.p_suction_Pa, "discharge": case.p_discharge_Pa})
     _write_fields(case, case_dir / "0", patches, p_init)
     return counts
@@ -279,12 +301,22 @@ def _write_fields(case: Frozen3DCase, zero: Path, patches: list[str], p_init) ->
 
 
 def mass_flows(case_dir: Path) -> dict[str, float]:
-    """Mass flow out of the domain through each patch [kg/s] at the last iteration
-    (the sum of phi, positive outward), from the run's surfaceFieldValue tables."""
+    """Mass flow [kg/s] at the last iteration through each patch (out of the domain
+    positive) and each sealing line (seal<n>: from its faces' owners to neighbours),
+    the sums of phi from the run's surfaceFieldValue tables."""
+    return _last(case_dir, "flow_", "surfaceFieldValue")
+
+
+def chamber_pressures(case_dir: Path) -> dict[str, float]:
+    """Volume-averaged pressure [Pa] of each chamber (cellZone) at the last iteration."""
+    return _last(case_dir, "pressure_", "volFieldValue")
+
+
+def _last(case_dir: Path, prefix: str, kind: str) -> dict[str, float]:
     out = {}
-    for path in sorted(Path(case_dir, "postProcessing").glob("flow_*/*/surfaceFieldValue.dat")):
+    for path in sorted(Path(case_dir, "postProcessing").glob(f"{prefix}*/*/{kind}.dat")):
         rows = [r.split() for r in path.read_text().splitlines() if r and not r.startswith("#")]
         if not rows:
             raise CaseError(f"{path} holds no iteration")
-        out[path.parent.parent.name.removeprefix("flow_")] = float(rows[-1][1])
+        out[path.parent.parent.name.removeprefix(prefix)] = float(rows[-1][1])
     return out

@@ -75,10 +75,11 @@ MIN_POLAR_STEP = 0.0
 class OGridSpec:
     """Resolution and shape controls of the O-grid."""
 
-    #: Cells around the annulus.  With the clustering below, 1024 keeps the skewness
-    #: under 4 over a lobe period of the default pair at 20 um (512: 7.4), but its wall
-    #: polygon cuts 3.6 um off the inner rotor's sharp edge next to a contact (phi = 0),
-    #: more than the first cell; 2048 cuts 0.015 um.
+    #: Cells around the annulus.  With the first (whole-annulus) column law, 1024 kept the
+    #: skewness under 4 over a lobe period of the default pair at 20 um (512: 7.4), but
+    #: its wall polygon cut 3.6 um off the inner rotor's sharp edge next to a contact
+    #: (phi = 0), more than the first cell; 2048 cut 0.015 um.  The anchored law with its
+    #: sag term (:mod:`.ogrid_columns`) keeps 512 columns within the limits at 100 um.
     columns: int = 2048
     cells_across_gap: int = 8  # cells from the inner wall to the outer (at every contact)
     #: tanh stretching parameter (0 = uniform across).  3.5, not 2: in a helical stack the

@@ -110,8 +110,10 @@ def segment_law(outer, inner, spec, scale: float, grid: np.ndarray, first: float
     """The clustering law on polar angles ``grid``: the walls' mean arc fraction, a share
     ``gap_clustering`` by h_ref / (h + h_ref) (h the radial width, h_ref = ``gap_reach``
     times the diameter: toward every sealing line, following it as it moves), a share
-    ``turn_clustering`` by the walls' turning (sharp bends).  Its scale does not matter:
-    each segment is normalised on its own."""
+    ``turn_clustering`` by the walls' turning (sharp bends); these three in columns (times
+    ``spec.columns``).  With ``first`` (the first cell's share of the width) it adds the
+    columns each wall needs for its chord sag (:func:`sag_columns`).  Each segment is
+    normalised on its own, so only the terms' ratios matter."""
     mean = 0.5 * (outer.arc_at(grid) + inner.arc_at(grid))
     width = np.interp(grid, outer.ang, outer.radius) - np.interp(grid, inner.ang, inner.radius)
     h_ref = spec.gap_reach * scale

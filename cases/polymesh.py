@@ -9,7 +9,9 @@ One cell thick with ``empty`` ends it is a 2D mesh; stacked by the sweep law
 Written directly (points, faces, owner, neighbour, boundary, ASCII): internal faces in
 upper-triangular order (by owner, then neighbour), each oriented from its owner to its
 neighbour, boundary faces outward.  Patches: ``innerRotor`` and ``outerRotor`` (walls),
-``ends`` (the two end planes, ``empty`` for one layer, ``wall`` otherwise).
+``ends`` (the two end planes, ``empty`` for one layer, ``wall`` otherwise), or the end
+faces named face by face (the ports of :mod:`.grid3d_case`).  The heights may be graded
+toward thin end layers (:func:`graded_heights`).
 """
 
 from __future__ import annotations

@@ -70,17 +70,24 @@ def graded_heights(length: float, layers: int, first: float | None = None,
 
 def helical_stack(pair, phi: float, gap: float, sweep, layers: int, spec=None,
                   end_layer: float | None = None):
-    """(sections, z): the O-grid at each height of a straight or helical sweep
-    (:func:`graded_heights`: ``layers`` equal layers, thin ones at the ends with
-    ``end_layer``)."""
+    """(sections, z): the O-grid at each height of a sweep (:func:`graded_heights`:
+    ``layers`` equal layers, thin ones at the ends with ``end_layer``).  The section at
+    z is the planar pair at ``phi - twist(z)`` scaled by ``scale(z)`` about the outer
+    axis (1 but for a conical sweep), the clearance ``gap`` the same at every height:
+    the grid of the unit pair at ``gap / scale``, scaled."""
+    from dataclasses import replace
+
     from .ogrid import OGridSpec, make_ogrid
 
-    if sweep.kind == "conical":
-        raise CaseError("stacking O-grids of a conical sweep is not implemented")
     z = graded_heights(sweep.length, layers, end_layer)
     z[-1] = sweep.length
-    sections = [make_ogrid(pair, phi - float(sweep.twist(zk)), gap, spec or OGridSpec())[0]
-                for zk in z]
+    sections = []
+    for zk in z:
+        s = float(sweep.scale(zk))
+        grid = make_ogrid(pair, phi - float(sweep.twist(zk)), gap / s, spec or OGridSpec())[0]
+        sections.append(grid if s == 1.0 else replace(
+            grid, points=grid.points * s,
+            wall_sag=None if grid.wall_sag is None else grid.wall_sag * s))
     return sections, z
 
 

@@ -74,7 +74,15 @@ def helical_stack(pair, phi: float, gap: float, sweep, layers: int, spec=None,
     ``layers`` equal layers, thin ones at the ends with ``end_layer``).  The section at
     z is the planar pair at ``phi - twist(z)`` scaled by ``scale(z)`` about the outer
     axis (1 but for a conical sweep), the clearance ``gap`` the same at every height:
-    the grid of the unit pair at ``gap / scale``, scaled."""
+    the grid of the unit pair at ``gap / scale``, scaled.
+
+    Quality against layers (default machine, 100 mm, 136 deg of wrap, 2048 x 8 at 20 um,
+    :mod:`.grid3d_quality`, checkMesh agreeing): non-orthogonality 89.0 / 88.2 / 86.3 /
+    85.2 deg at 17 / 34 / 68 / 92 layers (the faces between the crowded columns next to
+    an anchor in a sealing gap, whose spacing changes fast with the angle: the excess
+    over the helix's lean halves as the layers double); skewness 4.1-4.3 with equal
+    layers (the end faces), 3.59 with 0.15 mm end layers.  92 layers and the end layers
+    (1.6 million cells) pass checkMesh."""
     from dataclasses import replace
 
     from .ogrid import OGridSpec, make_ogrid

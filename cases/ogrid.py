@@ -54,6 +54,11 @@ from .ogrid_quality import QualityLimits, check, chord_sag, measure
 #: then bisected onto the true curve, so this only has to bracket them (and resolve the
 #: arc length to far below a column's share: 4096 samples per piece).
 SAMPLES_PER_PIECE = 4096
+#: The most a foot-matched outer node's offset from its polar position may shrink per
+#: column, in polar steps (:func:`_matched_outer`): below 1, so the nodes still advance
+#: (a leading and a lagging offset shrinking at the same column could still fold them:
+#: the fold check below stays).
+FADE_STEP = 0.9
 #: Bisection steps for a wall node's parameter: 2^-50 of a sample interval, far below
 #: a nanometre on a 0.1 m rotor.
 BISECTIONS = 50
@@ -70,13 +75,18 @@ MIN_POLAR_STEP = 0.0
 class OGridSpec:
     """Resolution and shape controls of the O-grid."""
 
-    #: Cells around the annulus.  With the clustering below, 1024 keeps the skewness
-    #: under 4 over a lobe period of the default pair at 20 um (512: 7.4), but its wall
-    #: polygon cuts 3.6 um off the inner rotor's sharp edge next to a contact (phi = 0),
-    #: more than the first cell; 2048 cuts 0.015 um.
+    #: Cells around the annulus.  With the first (whole-annulus) column law, 1024 kept the
+    #: skewness under 4 over a lobe period of the default pair at 20 um (512: 7.4), but
+    #: its wall polygon cut 3.6 um off the inner rotor's sharp edge next to a contact
+    #: (phi = 0), more than the first cell; 2048 cut 0.015 um.  The anchored law with its
+    #: sag term (:mod:`.ogrid_columns`) keeps 512 columns within the limits at 100 um.
     columns: int = 2048
     cells_across_gap: int = 8  # cells from the inner wall to the outer (at every contact)
-    wall_clustering: float = 2.0  # tanh stretching parameter; 0 = uniform across
+    #: tanh stretching parameter (0 = uniform across).  3.5, not 2: in a helical stack the
+    #: first cell on the wall of the largest chamber (27 mm across) leans with the nodes'
+    #: travel, and with a 2 mm tall first cell that gave boundary skewness 5.4 (4.4 at 3,
+    #: 3.8 at 3.5, on a 12-layer slice of the default machine).
+    wall_clustering: float = 3.5
     #: 0 = straight connecting lines, 1 = Hermite lines square to both walls.  A quarter:
     #: over a lobe period (2048 columns, every 6 deg) straight lines leave checkMesh's
     #: skewness at 5.7 (tall first cells leaning on the pin flanks), 0.25 brings it to
@@ -90,16 +100,19 @@ class OGridSpec:
     #: of the family's n5-lambda1.3 example at 5 of 11 angles; 0.005 folds none.
     foot_match_reach: float = 0.005
     #: Share of the columns crowded toward the sealing lines, and the wall distance (a
-    #: fraction of the diameter) that counts as near one (:mod:`.ogrid_columns`).
-    gap_clustering: float = 0.6
+    #: fraction of the diameter) that counts as near one (:mod:`.ogrid_columns`).  0.3
+    #: since the law has its own term for the chord sag (which was what the crowding
+    #: bought): at 0.6 the sag term lacked columns at the outer bends next to an anchor
+    #: (sag 0.54 of the first cell at 6 and 54 deg).
+    gap_clustering: float = 0.3
     gap_reach: float = 0.001
     #: Share of the columns placed by the walls' turning angle: at sigma_bar = 1 the
     #: inner profile's sharp edge bends so tightly that chords of even 100 um cut more
-    #: than the first cell off it.  0.08: with the law normalised per segment between
-    #: the sharp points, 0.15 crowded the sharp edge facing the largest chamber to 15 um
-    #: columns whose 27 mm lines crossed (inverted cells at 0 and 13 deg); at 0.08 the
-    #: sections keep skewness 3.9 and the wall sag within 0.3 of the first cell.
-    turn_clustering: float = 0.08
+    #: than the first cell off it.  With the law normalised per segment between the
+    #: sharp points, 0.15 crowded the sharp edge facing the largest chamber to 15 um
+    #: columns whose 27 mm lines crossed (inverted cells at 0 and 13 deg); 0.08 left
+    #: 79.5 deg non-orthogonality, 0.04 (the sag term doing the rest) 75.6.
+    turn_clustering: float = 0.04
     smoothing_relax: float = 0.5  # under-relaxation of each Jacobi sweep
 
     def check(self) -> None:
@@ -185,6 +198,7 @@ class _PolarTable:
         heading = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
         turn = np.concatenate([[0.0, 0.0], np.cumsum(np.abs(np.diff(heading)))])
         self.turn = (turn - np.interp(start, self.ang, turn)) / (turn[-1] / 3.0)
+        self.length, self.total_turn = total, turn[-1] / 3.0
         self.wall = wall
 
     def foot_parameters(self, x: np.ndarray) -> np.ndarray:
@@ -267,7 +281,16 @@ def _matched_outer(outer: _PolarTable, p_in, u_polar, spec, scale: float, where:
     u_foot = u_foot + n * np.round((u_polar - u_foot) / n)
     dist = np.linalg.norm(outer.wall.point(u_foot) - p_in, axis=1)
     w = np.exp(-(dist / (spec.foot_match_reach * scale)) ** 2)
-    u = w * u_foot + (1.0 - w) * u_polar
+    # The blend w u_foot + (1 - w) u_polar folds where w fades faster than the polar
+    # nodes advance while the foot points lead them by more than a few columns (the
+    # n5-lambda1.3 example's anchored columns, at 3 of 10 angles).  So the offset from the
+    # polar nodes may shrink by at most FADE_STEP of a polar step per column: a leading
+    # offset fades later (forward pass), a lagging one sets in earlier (backward pass).
+    # Both passes are maxima of continuous functions: continuous in the angle.
+    offset = w * (u_foot - u_polar)
+    step = FADE_STEP * np.diff(np.append(u_polar, u_polar[0] + n))
+    u = u_polar + _fade(np.maximum(offset, 0.0), step) - _fade(-np.minimum(offset, 0.0)[::-1],
+                                                               np.roll(step, 1)[::-1])[::-1]
     u = _smooth_sliding(outer, u, spec.smoothing_sweeps, spec.smoothing_relax * (1.0 - w))
     du = np.diff(np.append(u, u[0] + n))
     if not du.min() > 0.0:
@@ -275,6 +298,18 @@ def _matched_outer(outer: _PolarTable, p_in, u_polar, spec, scale: float, where:
         raise CaseError(f"{where}: the matched outer-wall nodes fold back at column {i} "
                         "(lower foot_match_reach)")
     return u
+
+
+def _fade(offset, step):
+    """The least sequence at or above ``offset`` that falls by at most ``step[i]`` from
+    column i to i + 1 (periodic: two passes around)."""
+    d = offset.copy()
+    m = len(d)
+    for k in range(2 * m):
+        i = k % m
+        j = (i + 1) % m
+        d[j] = max(d[j], d[i] - step[i])
+    return d
 
 
 def _smooth_sliding(table: _PolarTable, u, sweeps: int, relax: float):
@@ -346,7 +381,8 @@ def build_ogrid(pair, phi: float, gap: float, spec: OGridSpec = OGridSpec()) -> 
     outer = _PolarTable(outer_wall, anchors[0], where)
     inner = _PolarTable(inner_wall, anchors[0], where)
     counts = segment_columns(inner_wall, anchor_u, spec.columns)
-    ang = column_angles(outer, inner, spec, pair.diameter, anchors, counts)
+    first = radial_fractions(spec.cells_across_gap, spec.wall_clustering)[1]
+    ang = column_angles(outer, inner, spec, pair.diameter, anchors, counts, first)
     u_in = inner.parameter_at(ang)
     p_in = inner_wall.point(u_in)
     u_out = _matched_outer(outer, p_in, outer.parameter_at(ang), spec, pair.diameter, where)

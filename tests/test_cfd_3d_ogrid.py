@@ -58,7 +58,9 @@ def test_section_passes_check_mesh_with_our_measures(tmp_path, deg):
     assert m.max_non_orthogonality_deg == pytest.approx(q.max_non_orthogonality_deg, rel=PRINTED)
     assert m.max_skewness == pytest.approx(q.max_skewness, rel=PRINTED)
     assert volume == pytest.approx(q.total_area * dz, rel=PRINTED)
-    assert volume == pytest.approx(_exact_area() * dz, rel=1e-5)
+    # The wall polygons' chords cut the curved walls: 1.2e-5 of the area at 0 deg with
+    # the columns placed for the chord sag relative to the first cell (not for area).
+    assert volume == pytest.approx(_exact_area() * dz, rel=2e-5)
 
 
 def test_helical_slice_is_a_valid_3d_mesh(tmp_path):
@@ -68,10 +70,9 @@ def test_helical_slice_is_a_valid_3d_mesh(tmp_path):
     sections, z = helical_stack(PAIR, math.radians(13.0), GAP, sweep, 12)
     write_polymesh(tmp_path, sections, z)
     m, text, volume = _check(tmp_path)
-    # No negative volume, open cell or wrongly oriented face: only the skewness check
-    # fails (5.9 against checkMesh's 4: the outer wall's first cells, which lean with the
-    # nodes' travel along the helix; it was 24.6 before the columns were anchored).
-    assert all("skewness" in f for f in m.failed_checks), m.failed_checks
+    # checkMesh passes it: skewness 3.8 against its limit 4 (24.6 before the columns
+    # were anchored, 5.4 with the first cells of the wide chambers 2 mm tall).
+    assert m.ok, m.failed_checks
     assert "Cell volumes OK" in text
     # Straight edges between sections chord the helical walls: -8.6e-3 with 4 layers
     # (1.7 deg of twist each), -4.3e-4 with 12 (measured); 1e-3 bounds the 12-layer one.

@@ -287,16 +287,20 @@ def _jumps(pair, psi, loads):
             # Nodes in the band's shadow (:mod:`.track_ends`) hold no true contact:
             # each side is extrapolated from its two nearest nodes outside it.
             m = int(shadow / h)
-            zero = 0.0 * loads[j]
             a, b = j - m - 1, j + m + 1
-            left = (lambda x: loads[a] + (x - a) * (loads[a] - loads[a - 1])) \
-                if a >= 1 else (lambda x: zero)
-            right = (lambda x: loads[b] + (x - b) * (loads[b + 1] - loads[b])) \
-                if b + 1 < n else (lambda x: zero)
             for i in range(max(a + 1, 0), min(b, n)):
-                out[i] = left(i) if i < j else (right(i) if i > j else
-                                                0.5 * (left(j) + right(j)))
+                left = _extrapolate(loads, a, a - 1, i)
+                right = _extrapolate(loads, b, b + 1, i)
+                out[i] = left if i < j else (right if i > j else 0.5 * (left + right))
     return out
+
+
+def _extrapolate(loads, k, k2, i):
+    """Node i's value on the line through nodes k and k2 (zero: a side where the
+    chamber is not there)."""
+    if not (0 <= k < len(loads) and 0 <= k2 < len(loads)):
+        return 0.0 * loads[i]
+    return loads[k] + (i - k) * (loads[k] - loads[k2]) / (k - k2)
 
 
 def _tracks(seals_per_node, n, h) -> tuple[Track, ...]:

@@ -276,6 +276,8 @@ class SweptMachine:
         sec = self.section
         lines: dict[int, np.ndarray] = {}
         for which, offsets in (("lead", sec.lead_offset), ("trail", sec.trail_offset)):
+            if not np.any(offsets):
+                continue  # no chamber beyond (the family follows its contacts as tracks)
             pts = sec.lead if which == "lead" else sec.trail
             for d, v in self._line_lengths(pts, sec.contact_rate(which), offsets).items():
                 if d != 0:

@@ -152,3 +152,18 @@ def test_the_asymmetric_profile_shrinks_the_blow_hole():
         return max(a.max() for (n, d), a in machine.opening_areas.items() if n == NAMES[False])
 
     assert 0.0 < hole(m) < 0.5 * hole(machine())
+
+
+@pytest.mark.parametrize("profile", ["circular", "line-circle"])
+def test_the_ray_tests_only_the_edges_facing_it_and_loses_none(profile, monkeypatch):
+    """The ray's width per angle tests only the rotor edges turned into its polar window
+    (CuspRay._facing): the same widths as testing every edge, to the last bit, on both
+    cusps, along the cusp line and along a slanted plane, at scattered angles."""
+    ray = CuspRay(pair(profile))
+    psi = np.random.default_rng(7).uniform(-4.0, 4.0, 600)
+    slant = np.array([0.6, -0.8])
+    fast = [ray.width(psi, top, d) for top in (True, False) for d in (None, slant)]
+    monkeypatch.setattr(CuspRay, "_facing", lambda self, r, *_: self.edges[r][:2])
+    every = [ray.width(psi, top, d) for top in (True, False) for d in (None, slant)]
+    for a, b in zip(fast, every, strict=True):
+        assert np.array_equal(a, b)

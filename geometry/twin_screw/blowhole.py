@@ -61,8 +61,12 @@ RAY_SAMPLES = 512
 WIDTH_TOL = 2e-6
 JUMP_XTOL = 1e-11
 REFINE_ROUNDS = 40
-#: Angles per batch of the ray (its arrays are angles x polygon edges).
+#: Angles per batch of the ray (its arrays are angles x polygon edges), and the span
+#: (rad) of a batch: a batch over a narrow span faces few edges (:meth:`CuspRay._facing`).
 RAY_CHUNK = 128
+RAY_SPAN = 0.05
+#: Margin (rad) of an edge's polar window: rounding only (the edge's own span is added).
+FACING_MARGIN = 1e-6
 
 
 def openings_of(parts, qs):
@@ -107,7 +111,13 @@ class CuspRay:
             reach = abs(self.xc - self.axes[r][0])
             near = np.maximum(np.linalg.norm(p, axis=-1), np.linalg.norm(q, axis=-1)) >= reach
             near |= np.roll(near, 1)
-            self.edges.append((p[near], q[near]))
+            p, q = p[near], q[near]
+            # Each edge's polar angle (its middle's) and half the angle it spans: only
+            # edges turned into the ray's angular window about this axis can cross it.
+            mid = 0.5 * (p + q)
+            polar = np.arctan2(mid[:, 1], mid[:, 0])
+            span = 0.5 * np.linalg.norm(q - p, axis=-1) / np.linalg.norm(mid, axis=-1)
+            self.edges.append((p, q, polar, span))
 
     def angle(self, r, psi):
         return psi if r == MALE else -self.ratio * psi
@@ -119,7 +129,16 @@ class CuspRay:
         """Free length from the top (or bottom) cusp along ``direction`` (a unit vector
         into the bores; default along the cusp line) to the first rotor, per angle."""
         psi = np.atleast_1d(np.asarray(psi, dtype=float))
-        if len(psi) > RAY_CHUNK:  # angles x edges arrays: keep them small
+        # Angles x edges arrays: batches of angles within RAY_SPAN of each other, which
+        # face few edges.
+        bins = np.floor(psi / RAY_SPAN)
+        if np.ptp(bins) > 0:
+            out = np.empty(psi.shape)
+            for b in np.unique(bins):
+                sel = bins == b
+                out[sel] = self.width(psi[sel], top, direction)
+            return out
+        if len(psi) > RAY_CHUNK:
             return np.concatenate([self.width(psi[i:i + RAY_CHUNK], top, direction)
                                    for i in range(0, len(psi), RAY_CHUNK)])
         d = np.array([0.0, -1.0 if top else 1.0]) if direction is None else direction
@@ -127,7 +146,7 @@ class CuspRay:
         c0 = self.cusp_point(top)
         best = np.full(psi.shape, 2.0 * self.yc)
         for r in (MALE, FEMALE):
-            a, b = self.edges[r]
+            a, b = self._facing(r, psi, c0, d)
             ang = self.angle(r, psi)[:, None]
             c, s = np.cos(ang), np.sin(ang)
             o = self.axes[r] - c0
@@ -142,8 +161,28 @@ class CuspRay:
             with np.errstate(divide="ignore", invalid="ignore"):
                 t = ta + (tb - ta) * ha / (ha - hb)
             t = np.where(cross & (t >= 0.0), t, np.inf)
-            best = np.minimum(best, t.min(axis=1))
+            best = np.minimum(best, t.min(axis=1, initial=np.inf))
         return best
+
+
+    def _facing(self, r, psi, c0, d):
+        """Rotor r's edges that can cross the ray at any of the angles ``psi``: those
+        whose polar angle about the rotor's axis, turned by the rotor's angle, falls
+        within the polar angles the ray spans about that axis (the ray, a segment not
+        through the axis, spans the angles between its ends'), with a margin."""
+        p, q, polar, span = self.edges[r]
+        ends = np.array([c0, c0 + 2.0 * self.yc * d]) - self.axes[r]
+        seen = np.arctan2(ends[:, 1], ends[:, 0])
+        centre = math.atan2(math.sin(seen[0]) + math.sin(seen[1]),
+                            math.cos(seen[0]) + math.cos(seen[1]))
+        half = 0.5 * abs(math.remainder(seen[1] - seen[0], TWO_PI))
+        ang = self.angle(r, psi)
+        lo, hi = float(ang.min()), float(ang.max())
+        # polar + ang within centre +- half for some ang in [lo, hi]
+        off = np.abs(np.remainder(polar + 0.5 * (lo + hi) - centre + math.pi, TWO_PI)
+                     - math.pi)
+        keep = off <= half + 0.5 * (hi - lo) + span + FACING_MARGIN
+        return p[keep], q[keep]
 
 
 class WidthTable:

@@ -37,6 +37,24 @@ def _partner(name: str) -> str | None:
     return other + (f"#{rest}" if rest else "")
 
 
+def _mirror(name: str, d: int, track_lines: dict, done: set):
+    """The same line seen from the chamber beyond: its partner's track at offset -d,
+    first under the partner's own name (``interlobe-trail#2`` for
+    ``interlobe-lead#2``), else under any of the partner's names not yet paired (which
+    of a chamber's two points of one name is ``#2`` goes by the order they appear in,
+    :func:`.section._tracks`, not by the line)."""
+    other = _partner(name)
+    if other is None:
+        return None
+    if (other, -d) in track_lines and (other, -d) not in done:
+        return other, -d
+    base = other.partition("#")[0]
+    for key in sorted(track_lines):
+        if key[1] == -d and key[0].partition("#")[0] == base and key not in done:
+            return key
+    return None
+
+
 def twin_screw_paths(track_lines: dict, opening_areas: dict | None = None
                      ) -> tuple[LeakagePath, ...]:
     """Paths for the tracks' lines and the openings' areas (both keyed (name, offset))
@@ -50,8 +68,7 @@ def twin_screw_paths(track_lines: dict, opening_areas: dict | None = None
     for (name, d) in sorted(track_lines, key=lambda k: (k[0], k[1])):
         if (name, d) in done:
             continue
-        other = _partner(name)
-        mirror = (other, -d) if other is not None and (other, -d) in track_lines else None
+        mirror = _mirror(name, d, track_lines, done)
         done.add((name, d))
         if mirror is not None:
             done.add(mirror)

@@ -204,7 +204,10 @@ class SectionCutter(Boundaries):
         parts = []
         for number, piece in enumerate(fluid.decompose()):
             rings = [q / self.k for q in piece.to_polygons()]
-            holds = [any(_inside(ring, pt) for ring in rings[:1]) for pt in probes]
+            # (the probes lie in the mesh: most pieces' boxes miss them)
+            box = np.asarray(piece.bounds()).reshape(2, 2) / self.k
+            holds = [bool(np.all((pt >= box[0]) & (pt <= box[1]))) and _inside(rings[0], pt)
+                     for pt in probes]
             side = "top" if holds[0] and not holds[1] else (
                 "bottom" if holds[1] and not holds[0] else "")
             (x0, _), (x1, _) = np.asarray(piece.bounds()).reshape(2, 2) / self.k

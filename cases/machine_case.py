@@ -112,7 +112,6 @@ class Built:
     slots: tuple
     ages: dict
     seals: tuple  # (a, b) slot pairs with a sealing zone
-    chamber_volume: dict  # slot -> m3 (sum of its cells' volumes, by the mesh's own measure)
 
 
 def write_case(m: FrozenMachine, case_dir: Path) -> tuple[Plan, Built]:
@@ -145,30 +144,14 @@ def write_case(m: FrozenMachine, case_dir: Path) -> tuple[Plan, Built]:
         write_cell_zones(folder, cell_zones)
         write_face_zones(folder, face_zones)
 
-    vol = _cell_volumes(sections, z)
+    cells = zones.cell_slot.size
     plan = Plan(
         setup=(Step(("createPatch", "-overwrite"), then=zones_then),
                Step(("checkMesh",), then=functools.partial(judge_check_mesh,
-                                                           expected_cells=len(vol)))),
+                                                           expected_cells=cells))),
         solve=Step((SOLVER,)),
     )
-    built = Built(len(vol), zones.slots, dict(zones.ages), tuple(seals),
-                  {s: float(vol[zones.cell_slot == s].sum()) for s in zones.slots})
-    return plan, built
-
-
-def _cell_volumes(sections, z) -> np.ndarray:
-    """Cell volumes in polymesh order: the mean of the two sections' quad areas times the
-    layer height (the trapezoidal rule along z)."""
-    def quad_area(p):
-        a, b = p[:, :-1], np.roll(p, -1, 0)[:, :-1]
-        c, d = np.roll(p, -1, 0)[:, 1:], p[:, 1:]
-        return np.abs(0.5 * ((c - a)[..., 0] * (d - b)[..., 1]
-                             - (c - a)[..., 1] * (d - b)[..., 0]))
-
-    return np.concatenate([(0.5 * (quad_area(sections[k].points)
-                                   + quad_area(sections[k + 1].points))
-                            * (z[k + 1] - z[k])).ravel() for k in range(len(sections) - 1)])
+    return plan, Built(cells, zones.slots, dict(zones.ages), tuple(seals))
 
 
 def _write_dicts(m: FrozenMachine, case_dir: Path, chambers: list, seals: list) -> None:

@@ -31,10 +31,6 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-#: Slots searched on either side of the chambers alive at z = 0: a chamber reaches
-#: ``wrap / period`` slots further along the rotor.
-SLOT_MARGIN = 2
-
 
 @dataclass(frozen=True)
 class ChamberZones:
@@ -82,8 +78,11 @@ def column_slots(pair, sections, z, phi: float, sweep) -> tuple[np.ndarray, dict
     columns = sections[0].columns
     zm = 0.5 * (np.asarray(z[:-1]) + np.asarray(z[1:]))
     twist = np.asarray(sweep.twist(zm), dtype=float)
-    n_alive = int(np.ceil(float(sweep.wrap) / period)) + SLOT_MARGIN
-    candidates = range(-SLOT_MARGIN - 12, n_alive + 12)
+    # A planar chamber lives less than one turn of the outer rotor (N1 periods) and the
+    # section at z is that of the age ``- twist(z)``: every slot whose section can be
+    # alive somewhere on the rotor lies in this range (the rest return no polygon).
+    turn = int(np.ceil(2.0 * np.pi / period))
+    candidates = range(-turn - 1, turn + int(np.ceil(float(twist.max(initial=0.0)) / period)) + 2)
     labels = np.full((columns, layers), -1, dtype=int)
     ages = {}
     for k in range(layers):

@@ -73,17 +73,23 @@ class ChamberGeometry:
 
     def evaluate(self, ages: np.ndarray):
         """V, dV/dangle and the linear columns at the given ages (rows, then ages.shape)."""
-        i = np.minimum(np.maximum(np.searchsorted(self.nodes, ages, side="right") - 1, 0),
-                       self.coef.shape[1] - 1)  # (np.clip costs ~5 us more a call)
-        s = ages - self.nodes[i]
-        c = self.coef[:, i]
-        V = ((c[3] * s + c[2]) * s + c[1]) * s + c[0]
-        dV = (3.0 * c[3] * s + 2.0 * c[2]) * s + c[1]
-        lin = c[4::2] + c[5::2] * s
-        return V, dV, np.maximum(lin, 0.0)
+        return spline_at(self.nodes, self.coef, ages)
 
     def volume(self, ages):
         return self.evaluate(np.asarray(ages, dtype=float))[0]
+
+
+def spline_at(nodes, coef, ages):
+    """V, dV/dangle and the linear columns (rows, then ages.shape) of the coefficients
+    ``coef`` on the table's ``nodes`` at ``ages`` (also compiled, :mod:`.compiled`)."""
+    i = np.minimum(np.maximum(np.searchsorted(nodes, ages, side="right") - 1, 0),
+                   coef.shape[1] - 1)  # (np.clip costs ~5 us more a call)
+    s = ages - nodes[i]
+    c = coef[:, i]
+    V = ((c[3] * s + c[2]) * s + c[1]) * s + c[0]
+    dV = (3.0 * c[3] * s + 2.0 * c[2]) * s + c[1]
+    lin = c[4::2] + c[5::2] * s
+    return V, dV, np.maximum(lin, 0.0)
 
 
 def prepare(table, volume_ratio, suction_close, discharge_open, speed_rpm,

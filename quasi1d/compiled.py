@@ -1,5 +1,8 @@
 """The compiled right-hand side: :func:`.kernel.rhs_fused` and the physics it calls,
-compiled by numba, loaded only where it pays.
+compiled by numba, loaded only where it pays; and whole segments of the explicit
+Runge-Kutta methods in one compiled call (:mod:`.stepping` around
+:func:`.kernel.rhs_segment`, which evaluates the geometry too), so that Python is left
+once per segment instead of once per right-hand side.
 
 Numba is imported lazily and its machine code cached on disk (``cache=True``).  Even
 from its cache, loading costs a process ~0.5 s CPU (numba's import, its typing
@@ -25,6 +28,7 @@ import hashlib
 import inspect
 import os
 from pathlib import Path
+from typing import NamedTuple
 
 # CPU seconds of cycle solutions after which a process loads the compiled function (see
 # the docstring): about numba's loading cost, so that no process spends more than twice
@@ -61,7 +65,7 @@ def _cache_dir() -> Path:
     from . import kernel
 
     digest = hashlib.sha256()
-    for fn in (*_helpers(), kernel.rhs_fused):
+    for fn in (*_helpers(), *_entries()):
         digest.update(inspect.getsource(fn).encode())
     base = os.environ.get("NUMBA_CACHE_DIR") or str(Path.home() / ".cache")
     return Path(base) / "rotorflow-numba" / digest.hexdigest()[:16]
@@ -69,16 +73,34 @@ def _cache_dir() -> Path:
 
 def _cached() -> bool:
     """numba's cache holds the compiled function (without importing numba)."""
-    return any(_cache_dir().glob("**/*rhs_fused*.nbi"))
+    return all(any(_cache_dir().glob(f"**/*{fn.__name__}*.nbi")) for fn in _entries())
+
+
+def _entries():
+    from . import kernel
+
+    return (kernel.rhs_fused, kernel.segment_fused)
 
 
 def _helpers():
-    from . import coolprop_fluid, dry_air, flows, kernel
+    from . import chamber, coolprop_fluid, dry_air, flows, kernel, stepping
 
     return (flows._x_eff, flows.nozzle_critical_ratio, flows._psi, flows._psi_k,
             flows.nozzle_constants, flows.nozzle_f_c, flows.fanno_f, dry_air.table_interp,
             coolprop_fluid.table_interp, kernel.fluid_state, kernel.nodes, kernel.upstream,
-            kernel.mass_flows, kernel.enthalpy_flows, kernel.balances, kernel.ideal_ports)
+            kernel.mass_flows, kernel.enthalpy_flows, kernel.balances, kernel.ideal_ports,
+            chamber.spline_at, stepping.err_norm, stepping.rk_step, stepping._grow,
+            stepping.segment, kernel.rhs_segment, kernel.rk_step_fused,
+            kernel.rhs_fused)
+
+
+class Compiled(NamedTuple):
+    """The compiled entry points: the fused right-hand side (one call per evaluation) and
+    a whole segment's explicit Runge-Kutta integration (one call per segment)."""
+
+    rhs: object
+    rk_step: object  # the step's identity: integrate dispatches segments by it
+    segment: object
 
 
 def _compile():
@@ -95,7 +117,8 @@ def _compile():
         register_jitable(fn)
     # error_model "numpy": a trial state's division by zero gives inf/nan (rejected by
     # the step control) as in numpy, not an exception
-    return numba.njit(cache=True, error_model="numpy")(kernel.rhs_fused)
+    jit = numba.njit(cache=True, error_model="numpy")
+    return Compiled(jit(kernel.rhs_fused), kernel.rk_step_fused, jit(kernel.segment_fused))
 
 
 def warm_up() -> None:

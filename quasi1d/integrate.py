@@ -32,6 +32,8 @@ import numpy as np
 
 from rotorflow.errors import RotorflowError
 
+from . import stepping
+
 
 class IntegrationError(RotorflowError, RuntimeError):
     """The chamber equations could not be integrated (too stiff, or states left the range)."""
@@ -40,22 +42,29 @@ class IntegrationError(RotorflowError, RuntimeError):
 @dataclass(frozen=True)
 class Tableau:
     c: np.ndarray
-    a: tuple  # rows of the Runge-Kutta matrix
+    A: np.ndarray  # the Runge-Kutta matrix (stages, stages), zero on and above the diagonal
     b: np.ndarray
     e: np.ndarray  # b - b_hat: error estimate weights (length stages + 1 for FSAL)
     order: int  # order of the error estimator + 1 (exponent of the step control)
 
 
+def _lower(rows) -> np.ndarray:
+    A = np.zeros((len(rows), len(rows)))
+    for i, row in enumerate(rows):
+        A[i, :len(row)] = row
+    return A
+
+
 DOPRI5 = Tableau(
     c=np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0]),
-    a=(
-        np.array([]),
-        np.array([1 / 5]),
-        np.array([3 / 40, 9 / 40]),
-        np.array([44 / 45, -56 / 15, 32 / 9]),
-        np.array([19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729]),
-        np.array([9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656]),
-    ),
+    A=_lower((
+        (),
+        (1 / 5,),
+        (3 / 40, 9 / 40),
+        (44 / 45, -56 / 15, 32 / 9),
+        (19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729),
+        (9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656),
+    )),
     b=np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84]),
     e=np.array([71 / 57600, 0.0, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40]),
     order=5,
@@ -63,7 +72,7 @@ DOPRI5 = Tableau(
 
 BS3 = Tableau(
     c=np.array([0.0, 1 / 2, 3 / 4]),
-    a=(np.array([]), np.array([1 / 2]), np.array([0.0, 3 / 4])),
+    A=_lower(((), (1 / 2,), (0.0, 3 / 4))),
     b=np.array([2 / 9, 1 / 3, 4 / 9]),
     e=np.array([5 / 72, -1 / 12, -1 / 9, 1 / 8]),
     order=3,
@@ -71,8 +80,6 @@ BS3 = Tableau(
 
 TABLEAUS = {"dopri5": DOPRI5, "bs3": BS3}
 
-# Step-size controller: safety factor and the bounds of the change per step.
-SAFETY, GROW_MAX, SHRINK_MIN = 0.9, 5.0, 0.2
 # A replayed step whose error estimate exceeds the tolerance by this factor makes the
 # integration fall back to choosing its own steps.
 REPLAY_SLACK = 4.0
@@ -143,56 +150,58 @@ def _period(model, y0, method, rtol, atol, replay, record, max_steps, h0, stiff_
         if method in ("radau", "bdf"):
             y, ends = _scipy(model, seg, y, method, rtol, atol, run, record)
         else:
-            stepper = _ros23_step if method == "ros23" else _rk_stepper(TABLEAUS[method])
-            order = 3 if method == "ros23" else TABLEAUS[method].order
+            step, stages, order = _stepper(model, seg, method, run)
             ok = False
             if replay is not None:
                 # the previous period's steps, so that the period map stays one function;
                 # a segment whose replayed steps miss the tolerance chooses its own
                 slack = 1e30 if force_replay else REPLAY_SLACK  # never accept a non-finite step
-                ok, y_new, ends = _replay(model, seg, y, stepper, rtol, atol, replay[i], run,
-                                          record, slack)
+                ok, y_new, ends = _replay(model, seg, y, step, stages, rtol, atol, replay[i],
+                                          run, record, slack)
                 if ok:
                     y = y_new
                 else:
                     use_replay = False
             if not ok:
-                y, ends, h = _adaptive(model, seg, y, stepper, order, rtol, atol, h, run, record,
-                                       budget, stiff_error)
+                y, ends, h = _adaptive(model, seg, y, step, stages, order, rtol, atol, h, run,
+                                       record, budget, stiff_error)
         run.steps.append(ends)
     run.y = y
     run.replayed = use_replay
     return run
 
 
-def _err_norm(err, y, y_new, rtol, atol):
-    # The largest component error, not the RMS: an RMS over all slots and accumulators
-    # lets one chamber's pressure oscillate by 7-13 % of p_discharge at rtol 5e-4-1e-3
-    # while the other components dilute its error (issue 19, nozzle ports near balance).
-    sc = atol + rtol * np.maximum(np.abs(y), np.abs(y_new))
-    e = np.max(np.abs(err / sc), axis=1)
-    m = float(np.max(e))
-    return m if np.isfinite(m) else np.inf
+def _stepper(model, seg, method, run):
+    """step(t, y, h, k1, args) of ``method`` in ``seg`` with its arguments, the right-hand
+    sides a step evaluates and its order: the compiled fused Runge-Kutta step where the
+    model holds the compiled kernel and the segment is fusable, else Python."""
+    if method == "ros23":
+        return (lambda t, y, h, k1, _: _ros23_step(model, seg, t, y, h, k1, run), None), 4, 3
+    tab = TABLEAUS[method]
+    fast = getattr(model, "fast", {}).get("kernel")
+    geo = model.fused_geometry(seg) if fast is not None else None
+    if geo is not None:
+        return (fast.rk_step, ((tab.c, tab.A, tab.b, tab.e), geo, model._fused_args(seg))), \
+            len(tab.c), tab.order
+
+    def rhs(t, y, _):
+        return model.rhs(t, y, seg)
+
+    def step(t, y, h, k1, _):
+        return stepping.rk_step(rhs, None, tab.c, tab.A, tab.b, tab.e, t, y, h, k1)
+
+    return (step, None), len(tab.c), tab.order
 
 
-def _rk_stepper(tab: Tableau):
-    s = len(tab.c)
-
-    def step(model, seg, t, y, h, k1, run):
-        shape = y.shape
-        K = np.empty((s + 1, y.size))  # stages as rows: one matmul per stage combination
-        K[0] = k1.ravel()
-        yf = y.ravel()
-        for i in range(1, s):
-            yi = yf + h * (tab.a[i] @ K[:i])
-            K[i] = model.rhs(t + tab.c[i] * h, yi.reshape(shape), seg).ravel()
-        y_new = (yf + h * (tab.b @ K[:s])).reshape(shape)
-        k_new = model.rhs(t + h, y_new, seg)
-        K[s] = k_new.ravel()
-        run.n_rhs += s
-        return y_new, k_new, (h * (tab.e @ K)).reshape(shape)
-
-    return step
+def _run_segment(model, seg, step, ends, y, k1, h, rtol, atol, order, budget, slack,
+                 record):
+    """stepping.segment as Python, or its compiled twin for the compiled step."""
+    fast = getattr(model, "fast", {}).get("kernel")
+    rest = (seg.start, seg.end, ends, np.ascontiguousarray(y), k1, h, rtol, atol, order,
+            budget, slack, record)
+    if fast is not None and step[0] is fast.rk_step:
+        return fast.segment(step[1], *rest)
+    return stepping.segment(step[0], step[1], *rest)
 
 
 # Rosenbrock method of Shampine & Reichelt (MATLAB ode23s): L-stable, order 2 with a
@@ -205,7 +214,7 @@ JAC_T_STEP = 1.0e-7
 # Steps one Jacobian serves (renewed at every segment start and after a rejection).  The
 # formula is a W-method, so reuse keeps its order, but measured on nozzle-port cycles a
 # stale Jacobian cost more steps and cycles than it saved: a fresh one every step.
-JAC_REUSE = 1
+JAC_REUSE = 1  # (so a rejected step, retried at the same point, takes a new one too)
 
 
 def _jacobian(model, seg, t, y, f0, atol):
@@ -261,74 +270,50 @@ def _ros23_step(model, seg, t, y, h, F0, run):
     if not np.all(np.isfinite(F2)):
         return y, F0, np.full_like(y, np.inf)
     k3 = solve(F2 - _E32 * (k2 - F1) - 2.0 * (k1 - F0) + hdT)
-    run.n_rhs += 4
     return y_new, F2, (h / 6.0) * (k1 - 2.0 * k2 + k3)
 
 
-def _adaptive(model, seg, y, stepper, order, rtol, atol, h, run, record, budget, stiff_error):
-    t, t_end = seg.start, seg.end
-    span = t_end - t
+def _adaptive(model, seg, y, step, stages, order, rtol, atol, h, run, record, budget,
+              stiff_error):
     run.atol = atol
-    k1 = model.rhs(t, y, seg)
-    run.n_rhs += 1
-    if h is None or not np.isfinite(h) or h <= 0:
-        # initial step: a small fraction of what the derivative scale allows
-        d0 = np.max(np.abs(y) / (atol + rtol * np.abs(y)))
-        d1 = np.max(np.abs(k1) / (atol + rtol * np.abs(y)))
-        h = 0.01 * d0 / d1 if d1 > 0 else 0.01 * span
-    h = min(h, span)
-    ends = []
-    while t < t_end:
-        budget[0] -= 1
-        if budget[0] < 0:
-            if stiff_error:
-                raise _Stiff
-            raise IntegrationError(
-                f"step limit reached near angle {t:.4f} rad: the chamber equations are too "
-                'stiff for this integrator; use integrator "auto", "ros23" or "bdf"')
-        last = t + h >= t_end - 1e-12 * span
-        hh = t_end - t if last else h
-        y_new, k_new, err = stepper(model, seg, t, y, hh, k1, run)
-        en = _err_norm(err, y, y_new, rtol, atol)
-        if en <= 1.0:
-            t = t_end if last else t + hh
-            y, k1 = y_new, k_new
-            ends.append(t)
-            if record:
-                run.trace_theta.append(t)
-                run.trace_y.append(y[0].copy())
-            fac = GROW_MAX if en == 0 else min(GROW_MAX, SAFETY * en ** (-1.0 / order))
-            h = hh * fac if not last else max(h, hh)
-        else:
-            run.n_rejected += 1
-            run.jac = None
-            fac = SHRINK_MIN if not np.isfinite(en) else max(SHRINK_MIN,
-                                                             SAFETY * en ** (-1.0 / order))
-            h = hh * fac
-            if h < 1e-14 * max(span, 1.0):
-                if stiff_error:
-                    raise _Stiff
-                raise IntegrationError(f"step size underflow near angle {t:.6f} rad (state "
-                                       "not finite or tolerance unreachable)")
-    return y, ends, h
+    status, t, y, h, ends, trace, tried, rejected = _run_segment(
+        model, seg, step, np.empty(0), y, model.rhs(seg.start, y, seg),
+        np.nan if h is None else float(h), rtol, atol, order, budget[0], 0.0, record)
+    budget[0] -= tried
+    run.n_rhs += 1 + stages * tried
+    run.n_rejected += rejected
+    if status == stepping.OVER_BUDGET:
+        if stiff_error:
+            raise _Stiff
+        raise IntegrationError(
+            f"step limit reached near angle {t:.4f} rad: the chamber equations are too "
+            'stiff for this integrator; use integrator "auto", "ros23" or "bdf"')
+    if status == stepping.UNDERFLOW:
+        if stiff_error:
+            raise _Stiff
+        raise IntegrationError(f"step size underflow near angle {t:.6f} rad (state "
+                               "not finite or tolerance unreachable)")
+    _record(run, ends, trace, record)
+    return y, list(ends), h
 
 
-def _replay(model, seg, y, stepper, rtol, atol, ends, run, record, slack):
-    t = seg.start
+def _replay(model, seg, y, step, stages, rtol, atol, ends, run, record, slack):
     run.atol = atol
-    n_trace = len(run.trace_theta)
-    k1 = model.rhs(t, y, seg)
-    run.n_rhs += 1
-    for t_next in ends:
-        y_new, k1, err = stepper(model, seg, t, y, t_next - t, k1, run)
-        if not _err_norm(err, y, y_new, rtol, atol) <= slack:
-            del run.trace_theta[n_trace:], run.trace_y[n_trace:]
-            return False, None, None
-        y, t = y_new, t_next
-        if record:
-            run.trace_theta.append(t)
-            run.trace_y.append(y[0].copy())
+    ends = np.asarray(ends, dtype=float)
+    status, _, y, _, _, trace, taken, _ = _run_segment(
+        model, seg, step, ends, y, model.rhs(seg.start, y, seg), np.nan, rtol, atol, 0,
+        0, slack, record)
+    run.n_rhs += 1 + stages * taken
+    if status != stepping.DONE:
+        return False, None, None
+    _record(run, ends, trace, record)
     return True, y, list(ends)
+
+
+def _record(run, ends, trace, record):
+    if record:
+        run.trace_theta.extend(ends.tolist())
+        run.trace_y.extend(trace)
 
 
 def _scipy(model, seg, y, method, rtol, atol, run, record):

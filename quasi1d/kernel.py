@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import flows
+from . import flows, stepping
+from .chamber import spline_at
 from .coolprop_fluid import table_interp as table_2d
 from .dry_air import table_interp as table_1d
 
@@ -162,3 +163,28 @@ def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, 
         ideal_ports(dy, pdV, V, Vt, rho, u, p, h, pr, pu, c, p_pl, h_pl, mx, mxe, omega,
                     relax, n, gamma)
     return dy
+
+
+# -- one segment in one compiled call (issue 19) ---------------------------------------
+# args = (tableau (c, A, b, e), geometry (ChamberModel.fused_geometry), the arguments of
+# rhs_fused after its geometry (ChamberModel._fused_args)).
+
+def rhs_segment(theta, y, args):
+    """:func:`rhs_fused` at angle ``theta`` with the segment's geometry evaluated here:
+    what :meth:`.model.ChamberModel.rhs` computes for a fusable segment."""
+    nodes_, coef, kP, area_m, heat, omega, n, na, T_wall, w, relax = args[1]
+    V, dV, lin = spline_at(nodes_, coef, theta + kP)
+    area = area_m @ lin.reshape(lin.size)
+    wall = heat * V ** (2.0 / 3.0) if heat > 0.0 else np.empty(0)
+    return rhs_fused(y, n, na, V, 1.0 / V, dV, omega * dV, area, wall, T_wall, w, omega,
+                     relax, *args[2])
+
+
+def rk_step_fused(t, y, h, k1, args):
+    c, A, b, e = args[0]
+    return stepping.rk_step(rhs_segment, args, c, A, b, e, t, y, h, k1)
+
+
+def segment_fused(args, t, t_end, ends, y, k1, h, rtol, atol, order, budget, slack, record):
+    return stepping.segment(rk_step_fused, args, t, t_end, ends, y, k1, h, rtol, atol, order,
+                            budget, slack, record)

@@ -279,7 +279,7 @@ class ChamberModel:
             if args is not None:
                 g = self._geometry(theta, seg)
                 wall = g[6] if g[6] is not None else _NO_WALL
-                return fused(y, self.n, seg.n_act, g[0], g[1], g[2], g[3], g[4], wall,
+                return fused.rhs(y, self.n, seg.n_act, g[0], g[1], g[2], g[3], g[4], wall,
                              self.op.wall_temperature_K, self.inv_omega,
                              self.geo.omega_outer, IDEAL_PORT_RELAXATION_RAD, *args)
         n, na = self.n, seg.n_act
@@ -332,6 +332,20 @@ class ChamberModel:
                         seg.mx, seg.mxe, plen, *self.fluid.kernel_params(),
                         self.fluid.gamma if self.ideal_gas else 0.0)
             self.fast[key] = args
+        return self.fast[key]
+
+    def fused_geometry(self, seg: Segment):
+        """What the compiled segment step (:func:`.kernel.rhs_segment`) needs to evaluate
+        the geometry of ``seg`` itself, None where the segment is not fusable."""
+        if self._fused_args(seg) is None:
+            return None
+        key = ("geometry", seg.index)
+        if key not in self.fast:
+            heat = self.op.heat_transfer_W_m2K * WALL_AREA_FACTOR
+            self.fast[key] = (self.geo.nodes, self.geo.coef, seg.kP,
+                              np.ascontiguousarray(seg.area), heat, self.geo.omega_outer,
+                              self.n, seg.n_act, self.op.wall_temperature_K,
+                              self.inv_omega, IDEAL_PORT_RELAXATION_RAD)
         return self.fast[key]
 
     # -- observation -----------------------------------------------------------------

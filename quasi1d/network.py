@@ -284,22 +284,21 @@ def _topology(fr: _Frame, span, na, k_sc, k_do, links) -> Segment:
         else None)
 
 
-def _node_map(fr: _Frame, na, node_a, node_b, unit_m, unit_e):
-    """Rows of dy for a unit mass flow (unit_m) and a unit enthalpy flow (unit_e) from
-    node_a to node_b."""
+def _node_map(fr: _Frame, na, node_a, node_b):
+    """Rows of dy for a unit mass flow and for a unit enthalpy flow from node_a to node_b."""
     S, acc0, n, w = fr.n_state, fr.nv * fr.n, fr.n, fr.w
     rm = np.zeros(S)
     re = np.zeros(S)
     for node, sgn in ((node_a, -1.0), (node_b, 1.0)):
         if node == 0:
-            rm[acc0 + ACC_M_SUC] -= sgn * w * unit_m
-            re[acc0 + ACC_H_SUC] -= sgn * w * unit_e
+            rm[acc0 + ACC_M_SUC] -= sgn * w
+            re[acc0 + ACC_H_SUC] -= sgn * w
         elif node == na + 1:
-            rm[acc0 + ACC_M_DIS] += sgn * w * unit_m
-            re[acc0 + ACC_H_DIS] += sgn * w * unit_e
+            rm[acc0 + ACC_M_DIS] += sgn * w
+            re[acc0 + ACC_H_DIS] += sgn * w
         else:
-            rm[node - 1] += sgn * w * unit_m
-            re[n + node - 1] += sgn * w * unit_e
+            rm[node - 1] += sgn * w
+            re[n + node - 1] += sgn * w
     return rm, re
 
 
@@ -308,8 +307,7 @@ def _flow_maps(fr: _Frame, na, ia, ib, leak_laws):
     nf, acc0 = len(ia), fr.nv * fr.n
     mm, me, mg = (np.zeros((nf, fr.n_state)) for _ in range(3))
     for f in range(nf):
-        mm[f] = _node_map(fr, na, ia[f], ib[f], 1.0, 0.0)[0]
-        me[f] = _node_map(fr, na, ia[f], ib[f], 0.0, 1.0)[1]
+        mm[f], me[f] = _node_map(fr, na, ia[f], ib[f])
         if f < len(leak_laws):  # gross leakage, per report key
             mg[f, acc0 + fr.acc.leak(leak_laws[f].path.report_key)] = fr.w
     return mm, me, mg
@@ -320,8 +318,7 @@ def _ideal_maps(fr: _Frame, na, ideal, is_dis):
     mx, mxe = np.zeros((len(ideal), fr.n_state)), np.zeros((len(ideal), fr.n_state))
     for i, k in enumerate(ideal):
         plen = na + 1 if is_dis[i] else 0
-        mx[i] = _node_map(fr, na, plen, k + 1, 1.0, 0.0)[0]
-        mxe[i] = _node_map(fr, na, plen, k + 1, 0.0, 1.0)[1]
+        mx[i], mxe[i] = _node_map(fr, na, plen, k + 1)
     return mx, mxe
 
 

@@ -13,7 +13,8 @@ import sys
 import numpy as np
 import pytest
 
-from rotorflow.quasi1d import Leakage, Operating, Ports, compiled, kernel, simulate
+from rotorflow.quasi1d import (Leakage, Operating, Ports, compiled, integrate, kernel,
+                               simulate, stepping)
 from rotorflow.quasi1d.simulate import build_model
 from rotorflow.quasi1d.synthetic import sin2_table
 
@@ -26,6 +27,9 @@ RHS_RTOL = 1e-11
 # Whole cycles: identical but for round-off unless a step is accepted by one and
 # rejected by the other; then they differ by the integration error, below rtol (1e-4).
 CYCLE_RTOL = 1e-5
+# One segment's step ends and end state, compiled against Python: the step sizes follow
+# the error estimates' round-off through the controller's fifth root, compounded.
+STEP_RTOL = 1e-7
 
 
 def _op(**kw):
@@ -90,6 +94,44 @@ def test_compiled_rhs_equals_numpy(table, compiled_on, name):
             assert np.max(np.abs(got - ref) / scale) < RHS_RTOL, (seg.index, theta)
             checked += 1
     assert checked >= 4
+
+
+def test_compiled_segment_equals_python_steps(table, compiled_on):
+    """A whole segment in one compiled call (quasi1d.stepping through kernel.segment_fused)
+    against the same loop run as Python around the model's numpy right-hand side: the
+    same steps chosen, the same end state to round-off, and a replay of those steps."""
+    op, leak, ports = CASES["dry air, ideal ports, nozzle leakage"]
+    model = build_model(table, op, leak, ports)
+    seg = max((s for s in model.segments if kernel.fusable(model, s)),
+              key=lambda s: s.end - s.start)
+    y = np.repeat(model.initial_state()[None], 3, axis=0)
+    y[1:, 1:model.n] *= 1.0 + 1e-3 * np.arange(1, 3)[:, None]  # a batch, as Newton's
+    V = model.geo.volume(seg.start + seg.kP)
+    y[:, 0], y[:, model.n] = model.suc.rho * V[0], model.suc.rho * V[0] * model.suc.u
+    atol = 1e-6 * model.atol_scales()
+    tab = integrate.DOPRI5
+    model.fast["kernel"] = None
+    k1 = model.rhs(seg.start, y, seg)
+
+    def py_step(t, yy, h, kk, _):
+        return stepping.rk_step(lambda tt, y3, _a: model.rhs(tt, y3, seg), None, tab.c, tab.A,
+                                tab.b, tab.e, t, yy, h, kk)
+
+    args = ((tab.c, tab.A, tab.b, tab.e), model.fused_geometry(seg), model._fused_args(seg))
+    common = (seg.start, seg.end, np.empty(0), y, k1, np.nan, 1e-6, atol, tab.order, 10_000,
+              0.0, True)
+    ref = stepping.segment(py_step, None, *common)
+    got = compiled_on.segment(args, *common)
+    assert ref[0] == got[0] == stepping.DONE
+    # the same steps: round-off in the error estimates (RHS_RTOL of them) moves each step
+    # size, and so each later step end, by far less than STEP_RTOL
+    assert got[4].size == ref[4].size > 5
+    assert np.allclose(got[4], ref[4], rtol=STEP_RTOL, atol=0.0)
+    scale = np.max(np.abs(ref[2]), axis=0) + atol
+    assert np.max(np.abs(got[2] - ref[2]) / scale) < STEP_RTOL
+    again = compiled_on.segment(args, seg.start, seg.end, got[4], y, k1, np.nan, 1e-6, atol,
+                                tab.order, 0, 4.0, False)
+    assert again[0] == stepping.DONE and np.array_equal(again[2], got[2])
 
 
 @pytest.mark.parametrize("name", list(CASES)[:2])

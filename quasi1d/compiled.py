@@ -62,7 +62,6 @@ def kernel_for_point():
 
 @functools.lru_cache(maxsize=1)
 def _cache_dir() -> Path:
-    from . import kernel
 
     digest = hashlib.sha256()
     for fn in (*_helpers(), *_entries()):

@@ -13,8 +13,16 @@ import sys
 import numpy as np
 import pytest
 
-from rotorflow.quasi1d import (Leakage, Operating, Ports, compiled, integrate, kernel,
-                               simulate, stepping)
+from rotorflow.quasi1d import (
+    Leakage,
+    Operating,
+    Ports,
+    compiled,
+    integrate,
+    kernel,
+    simulate,
+    stepping,
+)
 from rotorflow.quasi1d.simulate import build_model
 from rotorflow.quasi1d.synthetic import sin2_table
 

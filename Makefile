@@ -25,7 +25,7 @@ $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[dev]'
-	$(PY) -m rotorflow.quasi1d.compiled  # numba's cache of the compiled right-hand side (~30 s once)
+	$(PY) -m rotorflow.quasi1d.compiled  # numba's cache of the compiled right-hand side and segment loop (~2 min once)
 	@touch $@
 
 venv: $(STAMP) ## create .venv and install rotorflow with its Python dependencies

@@ -8,13 +8,13 @@ Numba is imported lazily and its machine code cached on disk (``cache=True``).  
 from its cache, loading costs a process ~0.5 s CPU (numba's import, its typing
 registries, scipy.linalg for the matrix products), five times what one ideal-port
 operating point of the default case takes in numpy; compiling into an empty cache costs
-~2 min CPU (the segment loop ~1.5 of them).  So in "auto" (the default) a process starts in numpy and loads the compiled
-function once its cycle solutions have taken COMPILE_AFTER_S (a performance map, a
-sweep, an optimisation, a benchmark) and only if the cache holds it; each operating
-point is solved wholly by one of the two, which agree to round-off.  The cache is
-filled by ``python -m rotorflow.quasi1d.compiled`` (or by any run with
-``ROTORFLOW_COMPILED=1``, which compiles from the first point); ``=0`` never compiles
-(the numpy reference).  Without numba the model stays in numpy.
+~2 min CPU (the segment loop ~1.5 of them).  So in "auto" (the default) a process
+starts in numpy and loads the compiled function once its cycle solutions have taken
+COMPILE_AFTER_S (a performance map, a sweep, an optimisation, a benchmark) and only if
+the cache holds it; each operating point is solved wholly by one of the two, which
+agree to round-off.  The cache is filled by ``python -m rotorflow.quasi1d.compiled``
+(or by any run with ``ROTORFLOW_COMPILED=1``, which compiles from the first point);
+``=0`` never compiles (the numpy reference).  Without numba the model stays in numpy.
 
 The cache sits in numba's cache directory (NUMBA_CACHE_DIR, else ~/.cache) under a
 hash of the sources compiled: numba checks only the compiled function's own file, not

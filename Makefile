@@ -9,6 +9,7 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+NUMBA_STAMP := $(VENV)/.numba-cache
 CASE ?= examples/default.toml
 SWEEP ?= examples/lambda_wrap_sweep.toml
 OPTIMISE_CASE ?= examples/optimise_table1_inner_ev2.toml
@@ -25,24 +26,29 @@ $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[dev]'
-	$(PY) -m rotorflow.quasi1d.compiled  # numba's cache of the compiled right-hand side and segment loop (~2 min once)
 	@touch $@
 
-venv: $(STAMP) ## create .venv and install rotorflow with its Python dependencies
+# numba's cache of the compiled right-hand side and segment loop (~2 min CPU once, kept
+# in ~/.cache under a hash of the sources; without it the model runs in numpy)
+$(NUMBA_STAMP): $(STAMP) $(wildcard quasi1d/*.py)
+	$(PY) -m rotorflow.quasi1d.compiled
+	@touch $@
 
-demo: $(STAMP) ## set up, then run the built-in default case through every stage (cached)
+venv: $(NUMBA_STAMP) ## create .venv, install rotorflow with its Python dependencies, fill numba's cache
+
+demo: $(NUMBA_STAMP) ## set up, then run the built-in default case through every stage (cached)
 	$(VENV)/bin/rotorflow run examples/default.toml
 
-case: $(STAMP) ## run what a case asks for, skipping what is cached: make case CASE=path/to/case.toml
+case: $(NUMBA_STAMP) ## run what a case asks for, skipping what is cached: make case CASE=path/to/case.toml
 	$(VENV)/bin/rotorflow run $(CASE)
 
-sweep: $(STAMP) ## run a sweep on a local Dask cluster: make sweep SWEEP=examples/lambda_wrap_sweep.toml
+sweep: $(NUMBA_STAMP) ## run a sweep on a local Dask cluster: make sweep SWEEP=examples/lambda_wrap_sweep.toml
 	$(VENV)/bin/rotorflow sweep $(SWEEP)
 
-optimise: $(STAMP) ## multi-objective search of a case's [optimise] section: make optimise CASE=examples/optimise_table1_inner_ev2.toml
+optimise: $(NUMBA_STAMP) ## multi-objective search of a case's [optimise] section: make optimise CASE=examples/optimise_table1_inner_ev2.toml
 	$(VENV)/bin/rotorflow optimise $(if $(filter command line,$(origin CASE)),$(CASE),$(OPTIMISE_CASE))
 
-map: $(STAMP) ## performance map over speed and pressure ([map] section): make map CASE=... (into build/map/<case>)
+map: $(NUMBA_STAMP) ## performance map over speed and pressure ([map] section): make map CASE=... (into build/map/<case>)
 	$(VENV)/bin/rotorflow map $(CASE)
 
 report: $(STAMP) ## HTML report of a case (build/<case>/report/index.html): make report CASE=...
@@ -52,12 +58,16 @@ export: $(STAMP) ## solids and machining files of a case: make export CASE=... (
 	$(VENV)/bin/rotorflow export $(CASE) --out build/$(basename $(notdir $(CASE)))/export
 
 test: $(STAMP) openfoam ## set up, then run the tests (all tiers but slow)
+	@# numba's cache is filled on the second core while pytest runs on the first (a
+	@# fresh clone would otherwise wait ~2 min for it); tests that need it before it is
+	@# ready compile it themselves, the others run in numpy until it is there
+	$(MAKE) --no-print-directory $(NUMBA_STAMP) > $(VENV)/numba-cache.log 2>&1 &
 	$(PY) -m pytest -m "not slow" $(PYTEST_ARGS)
 
 lint: $(STAMP) ## ruff over the whole tree
 	$(VENV)/bin/ruff check .
 
-bench: $(STAMP) ## run-time-vs-error benchmarks into bench/results/
+bench: $(NUMBA_STAMP) ## run-time-vs-error benchmarks into bench/results/
 	$(PY) -m bench.run
 
 clean: ## remove build outputs (keeps .venv)

@@ -218,7 +218,8 @@ JAC_REUSE = 1  # (so a rejected step, retried at the same point, takes a new one
 
 
 def _jacobian(model, seg, t, y, f0, atol):
-    """df/dy and df/dt of every batch member by finite differences, in two batched calls.
+    """df/dy (its non-zero columns and their indices) and df/dt of every batch member by
+    finite differences, in two batched calls.
 
     Only the columns the right-hand side depends on are perturbed (the chamber states of
     the active slots; nothing depends on the accumulators or on inactive slots).  Each
@@ -235,14 +236,14 @@ def _jacobian(model, seg, t, y, f0, atol):
     ft = model.rhs(t + JAC_T_STEP, y, seg)
     if not (np.all(np.isfinite(F)) and np.all(np.isfinite(ft))):
         return None, None
-    J = np.zeros((B, S, S))
-    J[:, :, cols] = np.swapaxes((F - f0[:, None, :]) / delta[:, :, None], 1, 2)
-    return J, (ft - f0) / JAC_T_STEP
+    # only the perturbed columns: every other column of df/dy is zero
+    Jc = np.swapaxes((F - f0[:, None, :]) / delta[:, :, None], 1, 2)  # (B, S, nc)
+    return (Jc, cols), (ft - f0) / JAC_T_STEP
 
 
 def _ros23_step(model, seg, t, y, h, F0, run):
     jac = run.jac
-    if jac is None or jac[0] is not seg or jac[1] >= JAC_REUSE or jac[2].shape[0] != y.shape[0]:
+    if jac is None or jac[0] is not seg or jac[1] >= JAC_REUSE or jac[2][0].shape[0] != y.shape[0]:
         J, T = _jacobian(model, seg, t, y, F0, run.atol)
         run.jac = None if J is None else [seg, 0, J, T]
     else:
@@ -251,15 +252,21 @@ def _ros23_step(model, seg, t, y, h, F0, run):
         run.jac[1] += 1
     if J is None or not np.all(np.isfinite(F0)):
         return y, F0, np.full_like(y, np.inf)
+    # W = I - h d J with J non-zero in the columns c only: W k = R gives
+    # (I - h d J_cc) k_c = R_c, and then k = R + h d J[:, c] k_c (rows c included), so
+    # only the (nc, nc) block is inverted (the accumulators and idle slots need none)
+    Jc, cols = J
+    hd = h * _D
     try:
-        Wi = np.linalg.inv(np.eye(y.shape[1]) - (h * _D) * J)  # (B, S, S)
+        Wi = np.linalg.inv(np.eye(cols.size) - hd * Jc[:, cols, :])  # (B, nc, nc)
     except np.linalg.LinAlgError:
         return y, F0, np.full_like(y, np.inf)
 
     def solve(R):
-        return np.einsum("bij,bj->bi", Wi, R)
+        kc = np.einsum("bij,bj->bi", Wi, R[:, cols])
+        return R + hd * np.einsum("bij,bj->bi", Jc, kc)
 
-    hdT = (h * _D) * T
+    hdT = hd * T
     k1 = solve(F0 + hdT)
     F1 = model.rhs(t + 0.5 * h, y + 0.5 * h * k1, seg)
     if not np.all(np.isfinite(F1)):

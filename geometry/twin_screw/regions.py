@@ -201,7 +201,7 @@ class SectionCutter(Boundaries):
         self._runs = []
         probes = np.array([[self.xc, self.yc * (1.0 - CUSP_PROBE) - CUSP_PROBE * self.C],
                            [self.xc, -self.yc * (1.0 - CUSP_PROBE) + CUSP_PROBE * self.C]])
-        parts = []
+        parts, pending = [], []  # pending: (rotor, sub-piece, side, piece number)
         for number, piece in enumerate(fluid.decompose()):
             rings = [q / self.k for q in piece.to_polygons()]
             # (the probes lie in the mesh: most pieces' boxes miss them)
@@ -223,10 +223,11 @@ class SectionCutter(Boundaries):
                     parts.append(part)
                     continue
                 for sub in half.decompose():
-                    part = self._part(rotor, sub, psi, side)
-                    if part is not None:
-                        part.piece = number
-                        parts.append(part)
+                    parts.append(len(pending))  # its place, filled once all are walked
+                    pending.append((rotor, sub, side, number))
+        walked = self._parts(pending, psi)
+        parts = [walked[p] if isinstance(p, int) else p for p in parts]
+        parts = [p for p in parts if p is not None]
         self._contacts(psi, (polys[0] ^ polys[1]).decompose())
         self._loads()
         for part in parts:
@@ -300,16 +301,29 @@ class SectionCutter(Boundaries):
         return {}
 
     def _part(self, rotor, sub, psi, side) -> Part | None:
-        area = sub.area() / self.k ** 2
-        if area <= 0.0:
-            return None
-        rings = [q / self.k for q in sub.to_polygons()]
-        part = Part(rotor, 0, 0.0, area, np.zeros((2, 2)), np.zeros(2), np.zeros(2),
-                    side=side, polygons=rings)
-        for ring in rings:
-            self._walk(ring, psi, part)
-        part.centroid = _centroid(rings[0])
-        return part
+        return self._parts([(rotor, sub, side, 0)], psi)[0]
+
+    def _parts(self, subs, psi) -> list[Part | None]:
+        """The parts of sub-pieces ``subs`` ((rotor, CrossSection, side, piece number)),
+        their boundaries labelled together (:meth:`_labels`); None for an empty one."""
+        parts, rings = [], []
+        for rotor, sub, side, number in subs:
+            area = sub.area() / self.k ** 2
+            if area <= 0.0:
+                parts.append(None)
+                continue
+            own = [q / self.k for q in sub.to_polygons()]
+            parts.append(Part(rotor, 0, 0.0, area, np.zeros((2, 2)), np.zeros(2), np.zeros(2),
+                              side=side, piece=number, polygons=own))
+            rings.extend((ring, parts[-1]) for ring in own)
+        if rings:
+            labels = self._labels([ring for ring, _ in rings], psi)
+            for (ring, part), lab in zip(rings, labels, strict=True):
+                self._walk(ring, lab, psi, part)
+        for part in parts:
+            if part is not None:
+                part.centroid = _centroid(part.polygons[0])
+        return parts
 
     def _groove_age(self, rotor, rings, psi, side, groove=None, rate=0.0):
         """(groove index, age in male-angle units) of a part (module docstring).

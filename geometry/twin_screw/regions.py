@@ -140,14 +140,24 @@ class SectionCutter(Boundaries):
 
     # ------------------------------------------------------------ fixed data
     @cached_property
+    def profile_samples(self):
+        """Per rotor (male, female): parameters and points of its profile sampled to
+        SAMPLE_TOL (the sections' polygons before growing; the blow-hole's ray reads
+        them too)."""
+        out = []
+        for profile in (self.pair.male, self.pair.female):
+            u = sample(profile, SAMPLE_TOL * self.C)
+            out.append((u, profile.point(u)))
+        return tuple(out)
+
+    @cached_property
     def _rotor_data(self):
         """Per rotor: the grown polygon (own frame, metres), its KD-tree, its tip points,
         and per polygon edge the sliver between chord and curve and the curve's length
         (so that a run of edges gives the true area and length, not the chords')."""
         out = []
-        for profile in (self.pair.male, self.pair.female):
-            u = sample(profile, SAMPLE_TOL * self.C)
-            p = profile.point(u)
+        for profile, (u, p) in zip((self.pair.male, self.pair.female), self.profile_samples,
+                                   strict=True):
             sliver, length = _slivers(profile, u)
             grown = p + GROW * self.C * profile.normal(u)
             out.append(_Rotor(grown, cKDTree(grown), self.pair.tip_points(profile),

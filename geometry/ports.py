@@ -56,7 +56,10 @@ from .machine import SweptMachine
 DISCHARGE_PORTS = ("axial", "radial", "axial+radial")
 
 #: Angles per lobe period at which the chamber section is added to a port, and how many
-#: times more during the split phases near the deep mesh.
+#: times more during the split phases near the deep mesh.  A port is a union of sampled
+#: footprints, so its areas carry the sampling's strips: on the 4/6 twin screws, against
+#: ports sampled 384 times, 1e-3 (suction) and 3-4e-2 (discharge) at 24, converging at
+#: about first order (bench/bench_twin_screw.py).
 STEP_PER_PERIOD = 24
 SPLIT_REFINE = 8
 #: Holes of a port smaller than this fraction of its area are sampling strips, filled.
@@ -134,7 +137,7 @@ def _section(machine: SweptMachine, psi: float, contacts: list | None = None):
 
 
 def port_region(machine: SweptMachine, start: float, stop: float, face: str,
-                hulls: bool = False):
+                hulls: bool = False, steps: int = STEP_PER_PERIOD):
     """The union of the chamber's ``face`` ("lp"/"hp") sections for ages in [start, stop]
     (with ``hulls``, also what the chamber's tips sweep between the samples).
 
@@ -146,7 +149,7 @@ def port_region(machine: SweptMachine, start: float, stop: float, face: str,
     sec = machine.section
     shift = 0.0 if face == "lp" else sw.wrap
     scale = float(sw.scale(0.0 if face == "lp" else sw.length))
-    ages = _ages(machine, start, stop, shift)
+    ages = _ages(machine, start, stop, shift, steps)
     pieces = []
     prev = None
     for age in ages:
@@ -180,8 +183,9 @@ def union(pieces):
     return pieces[0]
 
 
-def _ages(machine: SweptMachine, start: float, stop: float, shift: float) -> np.ndarray:
-    """Sample ages: ``start``, ``stop`` and STEP_PER_PERIOD per lobe period between,
+def _ages(machine: SweptMachine, start: float, stop: float, shift: float,
+          steps: int = STEP_PER_PERIOD) -> np.ndarray:
+    """Sample ages: ``start``, ``stop`` and ``steps`` per lobe period between,
     SPLIT_REFINE times more while the section is split near the deep mesh (thin
     sub-regions that move fast).
 
@@ -190,7 +194,7 @@ def _ages(machine: SweptMachine, start: float, stop: float, shift: float) -> np.
     its sections (the twin screw) has those cut already, and only the ends, the port
     timing's own angles, cost a cut of their own."""
     sec = machine.section
-    step = machine.pair.period / STEP_PER_PERIOD
+    step = machine.pair.period / steps
     split = machine.pair.split_phase
     life = sec.phi_f - sec.phi_i
     regular = shift + step * np.arange(math.ceil((start - shift) / step),
@@ -250,7 +254,8 @@ def _tip_hulls(prev, cur, scale):
     return out
 
 
-def ports(machine: SweptMachine, timing: PortTiming, cut_discharge: bool = True):
+def ports(machine: SweptMachine, timing: PortTiming, cut_discharge: bool = True,
+          steps: int = STEP_PER_PERIOD):
     """(suction on the lp plate, discharge on the hp plate) as CrossSections.
 
     Each is what the chamber's face section covers while it is open to the port, less
@@ -262,19 +267,19 @@ def ports(machine: SweptMachine, timing: PortTiming, cut_discharge: bool = True)
     sec = machine.section
     life = sec.phi_f - sec.phi_i
     wrap = machine.sweep.wrap
-    suction = port_region(machine, 0.0, timing.suction_close, "lp", hulls=True)
+    suction = port_region(machine, 0.0, timing.suction_close, "lp", True, steps)
     sealed = port_region(machine, timing.suction_close, min(life, timing.death), "lp",
-                         hulls=True)
+                         True, steps)
     if not cut_discharge:
         return _fill_small_holes(suction - sealed), None
-    discharge = port_region(machine, timing.discharge_open, timing.death, "hp", hulls=True)
+    discharge = port_region(machine, timing.discharge_open, timing.death, "hp", True, steps)
     sealed_hp = port_region(machine, min(wrap, timing.discharge_open), timing.discharge_open,
-                            "hp", hulls=True)
+                            "hp", True, steps)
     return (_fill_small_holes(suction - sealed), _fill_small_holes(discharge - sealed_hp))
 
 
 def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray,
-               cut_discharge: bool = True):
+               cut_discharge: bool = True, steps: int = STEP_PER_PERIOD):
     """(suction, discharge): the area through which the chamber is open to each port at
     every age of ``ages`` (its face section inside the port), m2.
 
@@ -285,7 +290,8 @@ def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray,
     the discharge areas are zero and that port is not cut.
 
     The areas are cut at the ports' own sample ages (:func:`_ages`; a port edge sweeps
-    the chamber's footprint smoothly, and STEP_PER_PERIOD samples resolve its opening),
+    the chamber's footprint smoothly, and ``steps`` samples per lobe period resolve its
+    opening),
     linear between.  A sample while the chamber is sealed from a port, and the one
     where the port closes or opens, is one of the footprints taken out of that port
     (:func:`ports`): its area there is zero by construction, and not cut; the port's
@@ -293,10 +299,10 @@ def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray,
     """
     from manifold3d import CrossSection, FillRule
 
-    suction, discharge = ports(machine, timing, cut_discharge)
+    suction, discharge = ports(machine, timing, cut_discharge, steps)
     sec = machine.section
     sw = machine.sweep
-    step = machine.pair.period / STEP_PER_PERIOD
+    step = machine.pair.period / steps
     life = float(ages[-1])
     out = []
     for port, shift, face, open_ in ((suction, 0.0, 0.0, (0.0, timing.suction_close)),

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .machine import SweptMachine
+from .scalar import periodic_peak
 
 #: Isentropic exponent of seed 000's ideal adiabatic cycle ("an ideal gas with gamma =
 #: 1.4", section 4.3).  An assumption of that cycle, not a gas model: the quasi-1D model
@@ -157,8 +158,10 @@ def power_split(
     if driven not in names:
         raise ValueError(f"driven rotor {driven!r} is none of {names}")
     # Pi_max (seed 000 Eq. 22): the largest share of the input power that passes through
-    # a rotor that is not driven, i.e. through the gearing contact.
-    idle = np.delete(ratio, names.index(driven), axis=1)
+    # a rotor that is not driven, i.e. through the gearing contact; the maximum over the
+    # period located between the samples (:func:`.scalar.periodic_peak`).
+    idle = np.abs(np.delete(ratio, names.index(driven), axis=1))
+    pi_max = max(periodic_peak(idle[:, j])[1] for j in range(idle.shape[1]))
     return PowerSplit(
         phi=phi,
         torque=shaft,
@@ -168,5 +171,5 @@ def power_split(
         mean_power_per_omega1=float(np.mean(p_in)),
         cycle_power_per_omega1=cycle,
         driven=driven,
-        pi_max=float(np.max(np.abs(idle))),
+        pi_max=float(pi_max),
     )

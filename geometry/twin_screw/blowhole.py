@@ -44,10 +44,9 @@ from collections import defaultdict
 
 import numpy as np
 
-from ..curves import sample
 from ..planar import TWO_PI
 from ..section import Opening
-from .regions import FEMALE, MALE, SAMPLE_TOL
+from .regions import FEMALE, MALE
 
 #: The openings' names: at the bottom cusp, where the lobes go into mesh and the chambers
 #: are compressed (seed 004's blow-hole), and at the top one, where they come apart
@@ -104,8 +103,8 @@ class CuspRay:
         self.ratio = g.lobes_male / g.lobes_female
         self.axes = (np.zeros(2), np.array([g.centre_distance, 0.0]))
         self.edges = []
-        for r, profile in ((MALE, pair.male), (FEMALE, pair.female)):
-            p = profile.point(sample(profile, SAMPLE_TOL * g.centre_distance))
+        for r in (MALE, FEMALE):
+            p = pair.cutter.profile_samples[r][1]
             q = np.roll(p, -1, axis=0)
             # Points of the cusp segment lie at least this far from the rotor's axis.
             reach = abs(self.xc - self.axes[r][0])

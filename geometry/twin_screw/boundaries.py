@@ -76,22 +76,31 @@ class Boundaries:
     cutter's rotors, bores, cusp line and unit scale)."""
 
     # ------------------------------------------------------------ boundaries
-    def _labels(self, ring, psi):
-        """Per vertex: (label, index in its rotor polygon or -1); per edge: label."""
+    def _labels(self, rings, psi):
+        """Per ring of ``rings``: (label per edge, index in its rotor polygon or -1 per
+        vertex).  All rings of a section at once (numpy's cost is per call, not per
+        vertex): each vertex's successor is the next in its own ring."""
         tol = ON_TOL * self.C
+        ring = np.concatenate(rings)
         n = len(ring)
+        ends = np.cumsum([len(q) for q in rings])
+        starts = ends - [len(q) for q in rings]
+        after = np.arange(1, n + 1)
+        after[ends - 1] = starts
         vlab = np.full(n, NEW)
         vidx = np.full(n, -1)
+        todo = np.arange(n)  # (the female is asked only for what the male is not)
         for r in (MALE, FEMALE):
-            d, k = self._same_vertex(r, self.to_rotor(r, ring, psi))
-            hit = (d < SAME_VERTEX * self.C) & (vlab == NEW)
-            vlab[hit], vidx[hit] = r, k[hit]
+            d, k = self._same_vertex(r, self.to_rotor(r, ring[todo], psi))
+            hit = d < SAME_VERTEX * self.C
+            vlab[todo[hit]], vidx[todo[hit]] = r, k[hit]
+            todo = todo[~hit]
         for r, code in ((MALE, BORE_M), (FEMALE, BORE_F)):
             on = np.abs(np.linalg.norm(ring - self.O[r], axis=-1) - self.R[r]) < tol
             vlab[on & (vlab == NEW)] = code
-        nxt = np.roll(vlab, -1)
-        on_cusp = ((np.abs(ring[:, 0] - self.xc) < tol)
-                   & (np.abs(np.roll(ring[:, 0], -1) - self.xc) < tol))
+        nxt = vlab[after]
+        ahead = ring[after]
+        on_cusp = (np.abs(ring[:, 0] - self.xc) < tol) & (np.abs(ahead[:, 0] - self.xc) < tol)
         rotor_end = np.where(vlab <= FEMALE, vlab, np.where(nxt <= FEMALE, nxt, NEW))
         rotor_end[(vlab <= FEMALE) & (nxt <= FEMALE) & (vlab != nxt) & (vlab >= 0)] = NEW
         elab = np.where(rotor_end >= 0, rotor_end, np.where(vlab == nxt, vlab, NEW))
@@ -100,7 +109,6 @@ class Boundaries:
         # nearly parallel to it) ends where the line cuts it, at a new vertex on that
         # chord: up to there it is the rotor's, or both sides of the line lose a piece of
         # it (microns, where the flank is nearly parallel to the line).
-        ahead = np.roll(ring, -1, axis=0)
         for r in (MALE, FEMALE):
             for cut, new in ((on_cusp & ~chord & (vlab == r) & (nxt == NEW), ahead),
                              (on_cusp & ~chord & (nxt == r) & (vlab == NEW), ring)):
@@ -108,17 +116,18 @@ class Boundaries:
                     d = self._segment_distance(r, self.to_rotor(r, new[cut], psi))
                     chord[np.nonzero(cut)[0][d < SAME_VERTEX * self.C]] = True
         elab[on_cusp & ~chord] = CUSP
-        bore = (elab == NEW) & np.isin(vlab, (BORE_M, BORE_F)) & np.isin(nxt, (BORE_M, BORE_F))
+        bore = (elab == NEW) & (vlab >= BORE_M) & (vlab <= BORE_F) \
+            & (nxt >= BORE_M) & (nxt <= BORE_F)
         elab[bore] = np.where(np.linalg.norm(ring[bore] - self.O[0], axis=-1) < self.R[0] + tol,
                               BORE_M, BORE_F)
         rest = elab == NEW
         if rest.any():
             # An edge between two new corners (a cusp-line cut and a contact, say) lies
             # on whichever rotor's chords pass through its middle.
-            mid = 0.5 * (ring[rest] + np.roll(ring, -1, axis=0)[rest])
+            mid = 0.5 * (ring[rest] + ahead[rest])
             d = [self._segment_distance(r, self.to_rotor(r, mid, psi)) for r in (MALE, FEMALE)]
             elab[rest] = np.where(d[0] <= d[1], MALE, FEMALE)
-        return elab, vidx
+        return [(elab[a:b], vidx[a:b]) for a, b in zip(starts, ends, strict=True)]
 
     def _segment_distance(self, r, x):
         """Distance from points x (rotor r's frame) to rotor r's polygon's edges."""
@@ -135,10 +144,10 @@ class Boundaries:
                 best = np.minimum(best, np.linalg.norm(a + t[:, None] * e - x, axis=-1))
         return best
 
-    def _walk(self, ring, psi, part) -> None:
-        """Add the loads, wetted lengths, tips and contacts of one boundary ring, and
-        the curves' slivers to the part's polygon area."""
-        lab, vidx = self._labels(ring, psi)
+    def _walk(self, ring, labels, psi, part) -> None:
+        """Add the loads, wetted lengths, tips and contacts of one boundary ring (its
+        :meth:`_labels`), and the curves' slivers to the part's polygon area."""
+        lab, vidx = labels
         change = np.nonzero(lab != np.roll(lab, 1))[0]
         if not len(change):
             return

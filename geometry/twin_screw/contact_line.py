@@ -36,34 +36,51 @@ EDGE_XTOL = 1e-14
 def contact_line_length(pair, arcs, sweep, theta: float) -> float:
     """Length of the whole interlobe contact line at male angle ``theta`` (constant-lead
     helical or straight sweep; ``arcs``: the rack that generated ``pair``)."""
+    return float(contact_line_lengths(pair, arcs, sweep, [theta])[0])
+
+
+def contact_line_lengths(pair, arcs, sweep, thetas) -> np.ndarray:
+    """:func:`contact_line_length` at every male angle of ``thetas`` (the rack's samples
+    and their meshing points, which do not depend on the angle, found once)."""
     g = pair.gearing
     period = 2.0 * math.pi / g.lobes_male
     r1, c = g.r1, g.centre_distance
-    total = 0.0
+    t = np.linspace(0.0, 1.0, SAMPLES)
+    samples = []
     for arc in arcs:
-        t = np.linspace(0.0, 1.0, SAMPLES)
         q = arc.eval(t, 0)
-        s, ds = rack_shift(arc, t)
+        s, _ = rack_shift(arc, t)
         x = np.stack([r1 + q[:, 0], q[:, 1] + s], -1)
         inside = ((np.linalg.norm(x, axis=-1) <= pair.male_radius)
                   & (np.linalg.norm(x - [c, 0.0], axis=-1) <= pair.female_radius))
-        psi = s / r1
-        if sweep.wrap == 0.0:
-            # Straight: every contact of the section runs the whole length.
-            total += _count_contacts(psi, inside, theta, period) * sweep.length
-            continue
-        rate = sweep.wrap / sweep.length  # twist per length
-        k_lo = math.floor((psi.min() - theta) / period) - 1
-        k_hi = math.ceil((psi.max() - theta + sweep.wrap) / period) + 1
-        for k in range(k_lo, k_hi + 1):
-            z = (theta - psi + k * period) / rate
+        samples.append((arc, s / r1, inside))
+    out = np.zeros(len(thetas))
+    for i, theta in enumerate(thetas):
+        for arc, psi, inside in samples:
+            out[i] += _arc_length(pair, arc, sweep, float(theta), t, psi, inside, period)
+    return out
 
-            def z_at(u, k=k, arc=arc, rate=rate):
-                return (theta - rack_shift(arc, np.array([u]))[0][0] / r1 + k * period) / rate
 
-            ok = inside & (z >= 0.0) & (z <= sweep.length)
-            for lo, hi in _runs(t, ok, z, z_at, sweep.length):
-                total += _branch_length(pair, arc, lo, hi, rate)
+def _arc_length(pair, arc, sweep, theta, t, psi, inside, period) -> float:
+    """The contact line's length on the rotors from one rack arc (sampled at ``t``,
+    meshing at male angles ``psi``, inside both bores where ``inside``)."""
+    r1 = pair.gearing.r1
+    if sweep.wrap == 0.0:
+        # Straight: every contact of the section runs the whole length.
+        return _count_contacts(psi, inside, theta, period) * sweep.length
+    total = 0.0
+    rate = sweep.wrap / sweep.length  # twist per length
+    k_lo = math.floor((psi.min() - theta) / period) - 1
+    k_hi = math.ceil((psi.max() - theta + sweep.wrap) / period) + 1
+    for k in range(k_lo, k_hi + 1):
+        z = (theta - psi + k * period) / rate
+
+        def z_at(u, k=k):
+            return (theta - rack_shift(arc, np.array([u]))[0][0] / r1 + k * period) / rate
+
+        ok = inside & (z >= 0.0) & (z <= sweep.length)
+        for lo, hi in _runs(t, ok, z, z_at, sweep.length):
+            total += _branch_length(pair, arc, lo, hi, rate)
     return total
 
 

@@ -279,7 +279,7 @@ class TwinScrewPair(ContactSearch, RotorPair):
         side cusp to the chamber ahead) and seed 004 Fig. 2, the interlobe contact
         line's length over one lobe period (straight from the rack, :mod:`.contact_line`)."""
         from .blowhole import NAMES
-        from .contact_line import contact_line_length
+        from .contact_line import contact_line_lengths
 
         out = {}
         hole = [a for (name, d), a in machine.opening_areas.items()
@@ -290,7 +290,7 @@ class TwinScrewPair(ContactSearch, RotorPair):
         if arcs is None or machine.sweep.kind == "conical":
             return out
         thetas = np.linspace(0.0, self.period, CONTACT_LINE_SAMPLES, endpoint=False)
-        lengths = np.array([contact_line_length(self, arcs, machine.sweep, t) for t in thetas])
+        lengths = contact_line_lengths(self, arcs, machine.sweep, thetas)
         return {**out, "contact_line_length_max_mm": float(lengths.max() * 1e3),
                 "contact_line_length_min_mm": float(lengths.min() * 1e3)}
 

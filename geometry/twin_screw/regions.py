@@ -40,7 +40,8 @@ from scipy.spatial import cKDTree
 
 from ..curves import sample
 from ..planar import TWO_PI, rotate
-from .boundaries import CUSP_POINT, FEMALE, MALE, Boundaries
+from .ages import GrooveAges, centroid
+from .boundaries import FEMALE, MALE, Boundaries
 
 #: Coordinates run in units of C / UNITS inside Clipper (it rounds to 1e-8).
 UNITS = 1000.0
@@ -57,12 +58,6 @@ CUSP_PROBE = 2e-3
 #: An isolated piece within this fraction of a whole groove's area is a whole groove
 #: (the first one must be at least this fraction of C^2).
 WHOLE_FRACTION = 1e-2
-#: A pocket's area rate (per C^2 and radian) below this is no rate: it is handed over
-#: by the side of the line of centres it lies on.
-POCKET_RATE = 1e-12
-#: A part with a point this far (rad) beyond the cusps' polar angle reaches out of the
-#: mesh onto its bore (a bore's polygon vertex lies within a chord error, 1e-6 C, of it).
-MESH_MARGIN = 1e-4
 #: Gauss nodes per polygon edge for its sliver and length (the edge is a short smooth
 #: arc: 6 nodes integrate it to rounding).
 SLIVER_NODES = 6
@@ -122,7 +117,7 @@ class Part:
     cusp_top: bool = False  # whether that cusp point is the top one (y > 0)
 
 
-class SectionCutter(Boundaries):
+class SectionCutter(GrooveAges, Boundaries):
     """Cuts sections of one pair (see the module docstring)."""
 
     def __init__(self, pair):
@@ -140,14 +135,24 @@ class SectionCutter(Boundaries):
 
     # ------------------------------------------------------------ fixed data
     @cached_property
+    def profile_samples(self):
+        """Per rotor (male, female): parameters and points of its profile sampled to
+        SAMPLE_TOL (the sections' polygons before growing; the blow-hole's ray reads
+        them too)."""
+        out = []
+        for profile in (self.pair.male, self.pair.female):
+            u = sample(profile, SAMPLE_TOL * self.C)
+            out.append((u, profile.point(u)))
+        return tuple(out)
+
+    @cached_property
     def _rotor_data(self):
         """Per rotor: the grown polygon (own frame, metres), its KD-tree, its tip points,
         and per polygon edge the sliver between chord and curve and the curve's length
         (so that a run of edges gives the true area and length, not the chords')."""
         out = []
-        for profile in (self.pair.male, self.pair.female):
-            u = sample(profile, SAMPLE_TOL * self.C)
-            p = profile.point(u)
+        for profile, (u, p) in zip((self.pair.male, self.pair.female), self.profile_samples,
+                                   strict=True):
             sliver, length = _slivers(profile, u)
             grown = p + GROW * self.C * profile.normal(u)
             out.append(_Rotor(grown, cKDTree(grown), self.pair.tip_points(profile),
@@ -191,17 +196,18 @@ class SectionCutter(Boundaries):
 
     # ------------------------------------------------------------ one section
     def cut(self, psi: float) -> list[Part]:
-        from manifold3d import CrossSection
+        from manifold3d import CrossSection, OpType
 
         polys = []
         for r in (MALE, FEMALE):
             p = self._rotor_data[r].polygon
             polys.append(CrossSection([np.ascontiguousarray(self.rotor_at(r, p, psi) * self.k)]))
-        fluid = self._bores - polys[0] - polys[1]
+        # (one Clipper sweep for both rotors: 1.5 ms against 2.3 for two)
+        fluid = CrossSection.batch_boolean([self._bores, *polys], OpType.Subtract)
         self._runs = []
         probes = np.array([[self.xc, self.yc * (1.0 - CUSP_PROBE) - CUSP_PROBE * self.C],
                            [self.xc, -self.yc * (1.0 - CUSP_PROBE) + CUSP_PROBE * self.C]])
-        parts = []
+        parts, pending = [], []  # pending: (rotor, sub-piece, side, piece number)
         for number, piece in enumerate(fluid.decompose()):
             rings = [q / self.k for q in piece.to_polygons()]
             # (the probes lie in the mesh: most pieces' boxes miss them)
@@ -223,10 +229,11 @@ class SectionCutter(Boundaries):
                     parts.append(part)
                     continue
                 for sub in half.decompose():
-                    part = self._part(rotor, sub, psi, side)
-                    if part is not None:
-                        part.piece = number
-                        parts.append(part)
+                    parts.append(len(pending))  # its place, filled once all are walked
+                    pending.append((rotor, sub, side, number))
+        walked = self._parts(pending, psi)
+        parts = [walked[p] if isinstance(p, int) else p for p in parts]
+        parts = [p for p in parts if p is not None]
         self._contacts(psi, (polys[0] ^ polys[1]).decompose())
         self._loads()
         for part in parts:
@@ -300,91 +307,29 @@ class SectionCutter(Boundaries):
         return {}
 
     def _part(self, rotor, sub, psi, side) -> Part | None:
-        area = sub.area() / self.k ** 2
-        if area <= 0.0:
-            return None
-        rings = [q / self.k for q in sub.to_polygons()]
-        part = Part(rotor, 0, 0.0, area, np.zeros((2, 2)), np.zeros(2), np.zeros(2),
-                    side=side, polygons=rings)
-        for ring in rings:
-            self._walk(ring, psi, part)
-        part.centroid = _centroid(rings[0])
-        return part
+        return self._parts([(rotor, sub, side, 0)], psi)[0]
 
-    def _groove_age(self, rotor, rings, psi, side, groove=None, rate=0.0):
-        """(groove index, age in male-angle units) of a part (module docstring).
-
-        The age is the groove's mid-line angle from the line of centres, unwrapped over
-        the groove's life: a life runs from the top of the mesh once round to its
-        bottom, and with few lobes (a 1-lobe groove is the whole circumference) it lasts
-        longer than a revolution, so the mid-line's angle alone does not tell which
-        life a part is.  Its fluid does: a point of the part at polar angle ``a`` from
-        the line of centres (positive towards the top, where the grooves are born) has
-        travelled ``a mod 2 pi`` since it left the mesh, and lies ``f`` from the
-        mid-line, so the groove's age is ``(a mod 2 pi) - f``; the point taken is the
-        one farthest from the mesh, where that is unambiguous.
-
-        A part wholly inside the mesh (between the cusps) goes by the cusp it reaches
-        (its own, else its piece's ``side``): the top one is newborn, the bottom one
-        dying.  A pocket that reaches neither (trapped between contacts, or open to
-        both sides) belongs to the dying chamber while it shrinks and to the newborn one
-        while it grows (``rate``: its area's rate per male angle, which is its torques'
-        power): so it changes hands at its smallest, and the chambers' areas stay
-        continuous but for that carry-over.
-        """
-        pair = self.pair
-        n = pair.gearing.lobes_male if rotor == MALE else pair.gearing.lobes_female
-        period = TWO_PI / n
-        tip0 = pair.tip_angle(rotor)
-        centroid = _centroid(rings[0])
-        if groove is None:
-            local = self.to_rotor(rotor, centroid, psi)
-            groove = int(math.floor(((math.atan2(local[1], local[0]) - tip0) % TWO_PI)
-                                    / period)) % n
-        k = groove
-        mid = tip0 + (k + 0.5) * period  # the groove's mid-line, own frame
-        pts = np.concatenate(rings)
-        if rotor == MALE:
-            theta = math.remainder(mid + psi, TWO_PI)  # 0: facing the female axis
-            a = np.arctan2(pts[:, 1], pts[:, 0])
-            scale = 1.0
-        else:
-            theta = math.remainder(math.pi - (mid + self.female_angle(psi)), TWO_PI)
-            a = np.arctan2(pts[:, 1], self.C - pts[:, 0])
-            scale = 1.0 / self.ratio
-        far = int(np.argmax(np.abs(a)))
-        if abs(a[far]) > self._cusp_angle[rotor] + MESH_MARGIN:
-            age = float(a[far]) % TWO_PI - math.remainder(float(a[far]) - theta, TWO_PI)
-            return k, age * scale
-        # In the mesh: the part's points all lie within a lobe period of the line of
-        # centres, and so does the mid-line of its groove, seen from any of them.
-        near = math.remainder(float(a[far]) - theta, TWO_PI)
-        theta = float(a[far]) - near
-        reach = self._reaches(pts)
-        if reach != "":
-            side = reach
-        if side == "top":
-            age = theta
-        elif side == "bottom":
-            age = theta + TWO_PI
-        elif abs(rate) > POCKET_RATE * self.C ** 2:
-            age = theta if rate > 0.0 else theta + TWO_PI
-        else:
-            age = theta if centroid[1] > 0.0 else theta + TWO_PI
-        return k, age * scale
-
-    @cached_property
-    def _cusp_angle(self):
-        """Each rotor's polar angle of the cusps from the line of centres."""
-        return (math.atan2(self.yc, self.xc), math.atan2(self.yc, self.C - self.xc))
-
-    def _reaches(self, pts) -> str:
-        """"top" or "bottom" if points ``pts`` (a part's vertices) reach that cusp point
-        and not the other, else ""."""
-        tol = CUSP_POINT * self.C
-        top = bool(np.any(np.hypot(pts[:, 0] - self.xc, pts[:, 1] - self.yc) < tol))
-        bottom = bool(np.any(np.hypot(pts[:, 0] - self.xc, pts[:, 1] + self.yc) < tol))
-        return "top" if top and not bottom else ("bottom" if bottom and not top else "")
+    def _parts(self, subs, psi) -> list[Part | None]:
+        """The parts of sub-pieces ``subs`` ((rotor, CrossSection, side, piece number)),
+        their boundaries labelled together (:meth:`_labels`); None for an empty one."""
+        parts, rings = [], []
+        for rotor, sub, side, number in subs:
+            area = sub.area() / self.k ** 2
+            if area <= 0.0:
+                parts.append(None)
+                continue
+            own = [q / self.k for q in sub.to_polygons()]
+            parts.append(Part(rotor, 0, 0.0, area, np.zeros((2, 2)), np.zeros(2), np.zeros(2),
+                              side=side, piece=number, polygons=own))
+            rings.extend((ring, parts[-1]) for ring in own)
+        if rings:
+            labels = self._labels([ring for ring, _ in rings], psi)
+            for (ring, part), lab in zip(rings, labels, strict=True):
+                self._walk(ring, lab, psi, part)
+        for part in parts:
+            if part is not None:
+                part.centroid = centroid(part.polygons[0])
+        return parts
 
 
 def _inside(ring, pt) -> bool:
@@ -395,11 +340,3 @@ def _inside(ring, pt) -> bool:
     with np.errstate(divide="ignore", invalid="ignore"):
         xi = x + (pt[1] - y) * (x2 - x) / (y2 - y)
     return bool(np.sum(cond & (pt[0] < xi)) % 2)
-
-
-def _centroid(ring):
-    x, y = ring[:, 0], ring[:, 1]
-    x2, y2 = np.roll(x, -1), np.roll(y, -1)
-    c = x * y2 - x2 * y
-    a = 0.5 * c.sum()
-    return np.array([((x + x2) * c).sum(), ((y + y2) * c).sum()]) / (6.0 * a)

@@ -1,0 +1,91 @@
+"""The end-plate ports of a twin screw (geometry/ports.py) on the section table's grid.
+
+Independent references: the chamber's section cut afresh (a pair with no memo of cut
+sections) at the port's own angles, intersected with the port by Clipper; the port
+model's own construction (a footprint taken out of a port meets it nowhere).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from rotorflow.geometry import ports as P
+from rotorflow.geometry.machine import SweptMachine
+from rotorflow.geometry.summary import _timing
+from rotorflow.workflow.case import load_case
+
+from .conftest import CASES
+
+#: The 4/6 pin-cycloid machine at the coarsest resolution the bench runs.
+PPP = 24
+
+
+@pytest.fixture(scope="module")
+def built():
+    case = load_case(CASES / "twin_screw_4_6.toml")
+    machine = SweptMachine(case.pair, case.sweep(None), PPP)
+    assert machine.section.area.max() > 0.0  # the table cut first
+    table_cuts = set(case.pair.cut_memo)
+    timing = _timing(case, machine)
+    ages = machine.curves.phi - machine.curves.phi[0]
+    suction, discharge = P.ports(machine, timing)
+    areas = P.open_areas(machine, timing, ages)
+    return case, machine, timing, (suction, discharge), table_cuts, areas
+
+
+def _fresh_area(case, machine, port, psi, scale=1.0):
+    """The chamber's section at psi cut by a pair that has cut nothing yet, inside port."""
+    from manifold3d import CrossSection, FillRule
+
+    pair = dataclasses.replace(case.pair)
+    polys = [q for q in pair.chamber_polygons(psi) if len(q) >= 3]
+    if not polys:
+        return 0.0
+    chamber = CrossSection([np.ascontiguousarray(q * scale) for q in polys], FillRule.Positive)
+    return (chamber ^ port).area()
+
+
+def test_ports_reuse_the_table_cuts(built):
+    # Only the port timing's own angles (here the discharge opening; suction closes at a
+    # table node) cost a section of their own.
+    case, *_ , table_cuts, _ = built
+    assert 1 <= len(set(case.pair.cut_memo) - table_cuts) <= 2
+
+
+def test_open_areas_at_port_samples_equal_a_direct_cut(built):
+    case, m, timing, (suction, discharge), _, _ = built
+    sec, sw = m.section, m.sweep
+    step = m.period / P.STEP_PER_PERIOD
+    # Samples of the ports (_ages): ages shift + whole steps, open to the port.
+    lp_ages = step * np.arange(2, int(timing.suction_close / step), 9)
+    hp_ages = sw.wrap + step * np.arange(int((timing.discharge_open - sw.wrap) / step) + 1,
+                                         int((timing.death - sw.wrap) / step), 5)
+    assert len(lp_ages) >= 3 and len(hp_ages) >= 3
+    lp, hp = P.open_areas(m, timing, np.concatenate([lp_ages, hp_ages]))
+    direct_lp = [_fresh_area(case, m, suction, sec.phi_i + a) for a in lp_ages]
+    direct_hp = [_fresh_area(case, m, discharge, sec.phi_i + a - sw.wrap) for a in hp_ages]
+    # Clipper's rounding, and the port cropped per window (ports._areas_inside): 1e-8.
+    scale = max(lp.max(), hp.max())
+    assert np.abs(lp[:len(lp_ages)] - direct_lp).max() < 1e-8 * scale
+    assert np.abs(hp[len(lp_ages):] - direct_hp).max() < 1e-8 * scale
+    assert min(direct_lp) > 0.0 and max(direct_hp) > 0.0  # the samples are open
+
+
+def test_ports_open_and_close_at_their_timing(built):
+    case, m, timing, (suction, discharge), _, (lp, hp) = built
+    ages = m.curves.phi - m.curves.phi[0]
+    # The footprint at the discharge opening is taken out of the discharge port (the
+    # sealed union ends there): it meets the port in slivers of Clipper's rounding only
+    # (measured 1.4e-9 of the largest open area).
+    at_opening = _fresh_area(case, m, discharge, m.section.phi_i + timing.discharge_open
+                             - m.sweep.wrap)
+    assert at_opening < 1e-8 * hp.max()
+    # So the table's areas are zero up to the port's own angle, not a ramp across a step,
+    # and open right after it.
+    assert not hp[ages <= timing.discharge_open].any()
+    assert hp[np.searchsorted(ages, timing.discharge_open)] > 0.0
+    assert not lp[ages >= timing.suction_close].any()
+    assert lp[np.searchsorted(ages, timing.suction_close) - 1] > 0.0

@@ -18,18 +18,28 @@ module names what a steady run at machine angle ``phi`` must report on:
   a < b, oriented from the younger slot a into the older b: its summed flux is the net
   flow from a to b through the lines between them.
 * **Ports.**  The end faces whose centres lie in the suction region (z = 0) or the
-  discharge region (z = L) of :func:`..geometry.ports.ports`, in the machine frame.
+  discharge region (z = L) of :func:`..geometry.ports.ports`, in the machine frame, are
+  the patches ``suction`` and ``discharge`` (:func:`end_labels`, which
+  :func:`.polymesh.build_polymesh` calls as it writes the end faces, so the mesh has its
+  port patches from the start and no face is renumbered after the zones are cut); the
+  rest of both plates is the wall ``endPlates``.
 
-Labels are per (column, row, layer) and per cell in :mod:`.polymesh`'s numbering.
+Labels are per (column, row, layer) and per cell in :mod:`.polymesh`'s numbering; the
+zones are written straight into ``constant/polyMesh`` (:func:`write_zones`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from rotorflow.errors import CaseError
+
+from .polymesh import HEADER
+
+PORTS = ("suction", "discharge")
 
 
 @dataclass(frozen=True)
@@ -44,7 +54,7 @@ class ChamberZones:
         return np.flatnonzero(self.cell_slot == slot)
 
 
-def _inside(polygons, xy: np.ndarray) -> np.ndarray:
+def inside(polygons, xy: np.ndarray) -> np.ndarray:
     """Points of ``xy`` inside ``polygons`` by the even-odd rule over all of them (a
     region's holes are polygons of their own, as Clipper returns them)."""
     from matplotlib.path import Path as MplPath
@@ -78,6 +88,9 @@ def column_slots(pair, sections, z, phi: float, sweep) -> tuple[np.ndarray, dict
     columns = sections[0].columns
     zm = 0.5 * (np.asarray(z[:-1]) + np.asarray(z[1:]))
     twist = np.asarray(sweep.twist(zm), dtype=float)
+    # A conical stack's section at z is the unit pair's scaled about the outer axis
+    # (:func:`.polymesh.helical_stack`): label it in the unit pair's frame.
+    scale = np.array([float(sweep.scale(v)) for v in zm])
     # A planar chamber lives less than one turn of the outer rotor (N1 periods) and the
     # section at z is that of the age ``- twist(z)``: every slot whose section can be
     # alive somewhere on the rotor lies in this range (the rest return no polygon).
@@ -96,7 +109,7 @@ def column_slots(pair, sections, z, phi: float, sweep) -> tuple[np.ndarray, dict
             polys = pair.chamber_polygons(phi + s * period - twist[k])
             if not polys:
                 continue
-            hit = _inside(polys, centre) & (lab < 0)
+            hit = inside(polys, centre / scale[k]) & (lab < 0)
             if hit.any():
                 lab[hit] = s
                 ages[s] = phi + s * period
@@ -133,10 +146,36 @@ def seal_faces(zones: ChamberZones, owner: np.ndarray, neighbour: np.ndarray) ->
     return out
 
 
-def port_faces(points, faces, start: int, count: int, region, tol: float = 0.0
-               ) -> np.ndarray:
-    """Faces ``start .. start + count`` whose centres lie in ``region`` (polygons in the
-    plane); returns the face labels."""
-    label = np.arange(start, start + count)
-    centres = points[faces[label]].mean(axis=1)[:, :2]
-    return label[_inside(region, centres)]
+def end_labels(ports):
+    """The end-face namer :func:`.polymesh.build_polymesh` takes: on the low-pressure
+    plate (z = 0) the faces whose centre lies in the suction port ``ports[0]`` are the
+    patch ``suction``, on the high-pressure one those in the discharge port ``ports[1]``
+    ``discharge``, the rest of both plates the wall ``endPlates``.  ``ports``: each a
+    list of polygons in the machine frame (even-odd, as Clipper returns a region)."""
+
+    def name(xy: np.ndarray, end: str):
+        port = PORTS[0] if end == "lp" else PORTS[1]
+        region = ports[0] if end == "lp" else ports[1]
+        names = np.where(inside(region, xy), port, "endPlates")
+        return names, {port: "patch", "endPlates": "wall"}
+
+    return name
+
+
+def _labels(values) -> str:
+    v = np.asarray(values, dtype=np.int64)
+    return f"{v.size}\n(\n" + "\n".join(map(str, v.tolist())) + "\n)\n"
+
+
+def write_zones(case_dir: Path, cell_zones: dict, face_zones: dict) -> None:
+    """``constant/polyMesh/cellZones`` from {name: cell labels} and ``faceZones`` from
+    {name: (face labels, flip)}, in the polyMesh numbering the zones were cut in."""
+    cells = [f"{name}\n{{\n    type cellZone;\ncellLabels List<label> {_labels(c)};\n}}"
+             for name, c in cell_zones.items()]
+    faces = [f"{name}\n{{\n    type faceZone;\nfaceLabels List<label> {_labels(f)};\n"
+             f"flipMap List<bool> {_labels(np.asarray(flip, dtype=int))};\n}}"
+             for name, (f, flip) in face_zones.items()]
+    mesh = Path(case_dir) / "constant" / "polyMesh"
+    for obj, body in (("cellZones", cells), ("faceZones", faces)):
+        (mesh / obj).write_text(HEADER.format(cls="regIOobject", obj=obj) + "\n"
+                                + f"{len(body)}\n(\n" + "\n".join(body) + "\n)\n")

@@ -10,8 +10,8 @@ Written directly (points, faces, owner, neighbour, boundary, ASCII): internal fa
 upper-triangular order (by owner, then neighbour), each oriented from its owner to its
 neighbour, boundary faces outward.  Patches: ``innerRotor`` and ``outerRotor`` (walls),
 ``ends`` (the two end planes, ``empty`` for one layer, ``wall`` otherwise), or the end
-faces named face by face (the ports of :mod:`.grid3d_case`).  The heights may be graded
-toward thin end layers (:func:`graded_heights`).
+faces named face by face (the ports, :func:`.machine_zones.end_labels`).  The heights
+may be graded toward thin end layers (:func:`graded_heights`).
 """
 
 from __future__ import annotations

@@ -6,11 +6,8 @@ the machine's periodic state.  Plain iteration z <- Phi(z) converges slowly when
 couples the chambers (an error leaves only after a chamber's whole life); the solver
 therefore applies Newton's method to Phi(z) - z, with the Jacobian of Phi taken by
 finite differences over a batch of perturbed states integrated together with z in the
-same pass (one shared step sequence), in the first period and after a step that failed;
-in between, Broyden's rank-one update from the last two iterates stands in for it (with
-the compiled right-hand side a batch of the default case's 15 states costs three to four
-times a single state: 6.5 against 1.8 ms a period; Newton converged in 4 batched
-periods, Broyden in one batched and five single ones).  Once the
+same pass (one shared step sequence; a batch costs little more than one state because
+the work per step is dominated by fixed overhead, not by the array length).  Once the
 step sequence has been found, later periods replay it, so that Phi is one fixed smooth
 map and Newton converges on it instead of on integration noise.
 
@@ -108,37 +105,19 @@ def _unknowns(model: ChamberModel) -> np.ndarray:
     return idx[alive]
 
 
-def _update_best(model, run, z, z_next, idx, dz, scales, norm, figures, nw):
+def _update_best(model, run, z, z_next, idx, dz, norm, best, lam, figures):
     """Keep the iterate with the smallest residual and its Newton step (None when the
-    Jacobian is singular or the step not finite); a worse iterate halves the damping
-    and asks for a finite-difference Jacobian in the next period.
-
-    The Jacobian of Phi(z) - z (in z / scales) is taken by finite differences where the
-    period was integrated with its batch of perturbed states, else updated from the
-    last two iterates by Broyden's rank-one formula: a batched period of the default
-    case costs ten times a single state's, and near the fixed point the secant update
-    keeps Newton's convergence superlinear."""
-    zs, Fs = z[idx] / scales[idx], (z_next - z)[idx] / scales[idx]
-    if run.y.shape[0] > 1:
-        Phi = np.stack([model.shift(yy)[idx] for yy in run.y[1:]])  # row i: input i
-        J = ((Phi - z_next[idx]) / dz[:, None]).T * (scales[idx][None, :] / scales[idx][:, None])
-        J -= np.eye(idx.size)
-    else:
-        J = nw.J.copy()
-        ds, dF = zs - nw.secant[0], Fs - nw.secant[1]
-        if np.dot(ds, ds) > 0.0:
-            J += np.outer(dF - J @ ds, ds) / np.dot(ds, ds)
-    nw.J, nw.secant = J, (zs, Fs)
-    if not (nw.best is None or norm < nw.best[0]):  # (a NaN residual is never the best)
-        nw.fd = True
-        return nw.best, nw.lam * 0.5
+    Jacobian is singular or the step not finite); a worse iterate halves the damping."""
+    if not (best is None or norm < best[0]):  # (a NaN residual is never the best)
+        return best, lam * 0.5
+    Phi = np.stack([model.shift(yy)[idx] for yy in run.y[1:]])  # row i: input i
+    J = ((Phi - z_next[idx]) / dz[:, None]).T - np.eye(idx.size)
     try:
-        step = np.linalg.solve(J, -Fs) * scales[idx]
+        step = np.linalg.solve(J, -(z_next - z)[idx])
     except np.linalg.LinAlgError:
         step = None
     if step is not None and not np.all(np.isfinite(step)):
         step = None
-    nw.fd = step is None
     return (norm, z, run, step, z_next, figures), 1.0
 
 
@@ -188,9 +167,8 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
             message = (f"stopped at the time budget of {num.max_seconds:g} s ([numerics] "
                        f"max_seconds) after {cycles} periods: ")
             break
-        batch = newton and nw.fd
-        Y0 = np.repeat(z[None], d + 1 if batch else 1, axis=0)
-        if batch:
+        Y0 = np.repeat(z[None], d + 1 if newton else 1, axis=0)
+        if newton:
             Y0[np.arange(1, d + 1), idx] += dz
         run = integrate_period(model, Y0, method, rtol, atol, replay=replay,
                                record=record, max_steps=num.max_steps,
@@ -226,11 +204,11 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
             atol = atol * 0.1
             replay = None
             z = nw.best[1]
-            nw.best, nw.fd = None, True
+            nw.best = None
             dp = dT = mc = ec = np.inf
         else:
             z = nw.best[4]
-            nw.best, nw.fd = None, True
+            nw.best = None
     if not converged:
         best = nw.best
         if best is not None and best[0] < float(np.max(np.abs(z_next - z)[idx] / scales[idx])):
@@ -251,9 +229,6 @@ class _NewtonState:
     lam: float = 1.0  # damping of the next step from the best iterate
     mark: float = np.inf  # the best residual when it last halved
     since_gain: int = 0  # periods since
-    fd: bool = True  # the next period takes the Jacobian by finite differences
-    J: np.ndarray | None = None  # Jacobian of Phi(z) - z in z / scales
-    secant: tuple = ()  # (z, Phi(z) - z) of the last iterate, in z / scales
 
 
 def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figures):
@@ -263,8 +238,8 @@ def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figur
     ("anderson", the best iterate's image) when the best residual has not halved in
     NEWTON_PATIENCE periods."""
     norm = float(np.max(np.abs(z_next - z)[idx] / scales[idx]))
-    nw.best, nw.lam = _update_best(model, run, z, z_next, idx, dz, scales, norm,
-                                   figures, nw)
+    nw.best, nw.lam = _update_best(model, run, z, z_next, idx, dz, norm, nw.best, nw.lam,
+                                   figures)
     if nw.best[0] < 0.5 * nw.mark:
         nw.mark, nw.since_gain = nw.best[0], 0
     else:

@@ -16,6 +16,7 @@ MODULES = (
     "bench.bench_real_fluid",
     "bench.bench_solids",
     "bench.bench_cfd",
+    "bench.bench_cfd3d",
     "bench.bench_workflow",
     "bench.bench_process",
     "bench.bench_optimise",

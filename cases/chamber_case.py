@@ -323,18 +323,25 @@ def _resolve(path: str, case_path: Path) -> Path:
     return p if p.is_absolute() else Path(case_path).parent / p
 
 
+def flow_coefficient_path(ctx, given: str | None) -> Path | None:
+    """Where the "cfd-calibrated" correlation is: ``given`` (relative to the case file),
+    else the cfd.leakage stage's fit when that stage ran; None (with a warning) when
+    there is none."""
+    if given is not None:
+        return _resolve(given, ctx.case_path)
+    if "cfd.leakage" in ctx.inputs:
+        return ctx.inputs["cfd.leakage"] / "flow_coefficient.json"
+    log.warning("no fitted flow coefficient: compared without the cfd-calibrated model")
+    return None
+
+
 def _load_fit(ctx, settings: ChamberSettings):
-    """The correlation for "cfd-calibrated": the section's file, else the cfd.leakage
-    stage's; None (with a warning) when there is none or it does not load."""
+    """The correlation for "cfd-calibrated" (:func:`flow_coefficient_path`); None (with
+    a warning) when there is none or it does not load."""
     from rotorflow.quasi1d.calibrated import FlowCoefficientFit
 
-    if settings.flow_coefficient is not None:
-        path = _resolve(settings.flow_coefficient, ctx.case_path)
-    elif "cfd.leakage" in ctx.inputs:
-        path = ctx.inputs["cfd.leakage"] / "flow_coefficient.json"
-    else:
-        log.warning("no fitted flow coefficient: the chamber is compared without the "
-                    "cfd-calibrated model")
+    path = flow_coefficient_path(ctx, settings.flow_coefficient)
+    if path is None:
         return None
     try:
         return FlowCoefficientFit.load(path)

@@ -58,7 +58,7 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
     if getattr(pair, "port_areas", False):
         # The chamber meets the end plates long before and after its ports (a twin-screw
         # groove reaches the discharge plate while still filling): the port timing.
-        timing = _timing(case, m)
+        timing = case_port_timing(case, m)
         suction_close = phi[0] + timing.suction_close
         discharge_open = phi[0] + timing.discharge_open
         if "radial" in _discharge_ports(case):
@@ -164,7 +164,7 @@ def _port_areas(case, m: SweptMachine):
 
     cur = m.curves
     ages = cur.phi - cur.phi[0]
-    timing = _timing(case, m)
+    timing = case_port_timing(case, m)
     kinds = _discharge_ports(case)
     area_lp, axial = open_areas(m, timing, ages, cut_discharge="axial" in kinds)
     if "radial" not in kinds:
@@ -176,14 +176,14 @@ def _port_areas(case, m: SweptMachine):
 def _timing_scalars(case, m: SweptMachine) -> dict[str, float]:
     """The port timing the table's port areas follow, for the quasi-1D model to read
     (:func:`rotorflow.quasi1d.chamber.prepare`): one rule, :func:`.ports.port_timing`."""
-    t = _timing(case, m)
+    t = case_port_timing(case, m)
     op = case.raw.get("operating", {})
     return {"suction_close_rad": t.suction_close, "discharge_open_rad": t.discharge_open,
             "volume_ratio": float(case.volume_ratio),
             "early_opening_rad": math.radians(float(op.get("discharge_early_opening_deg", 0.0)))}
 
 
-def _timing(case, m: SweptMachine):
+def case_port_timing(case, m: SweptMachine):
     """The case's port timing (volume ratio, early opening, or explicit angles)."""
     from .ports import port_timing
 

@@ -15,20 +15,21 @@ the product's own frozen quasi-1D pressures.
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from rotorflow.cases import foam
-from rotorflow.cases.machine_case import FrozenMachine, read_outputs, write_case
-from rotorflow.cases.ogrid import OGridSpec
-from rotorflow.geometry.machine import SweptMachine
-from rotorflow.geometry.ports import port_timing, ports
-from rotorflow.geometry.summary import chamber_table
-from rotorflow.quasi1d.frozen import solve_frozen
-from rotorflow.quasi1d.simulate import build_model, case_settings
+from rotorflow.cases.machine_case import read_outputs, write_case
+from rotorflow.cases.machine_setup import (
+    Grid,
+    case_table,
+    frozen_machine,
+    frozen_models,
+    slot_of,
+    table_origin,
+)
 from rotorflow.workflow.case import load_case
 
 pytestmark = [
@@ -56,34 +57,25 @@ def _slab_case(tmp_path: Path) -> Path:
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("machine3d")
-    path = _slab_case(tmp)
-    case = load_case(path)
-    op, leak, port_model, num, _ = case_settings(tomllib.loads(path.read_text()), "slab")
-    machine = SweptMachine(case.pair, case.sweep(None))
-    model = build_model(chamber_table(case, machine), op, leak, port_model, num)
-    frozen = solve_frozen(model, PHI)
-    period = float(case.pair.period)
-    initial = {round((a - PHI) / period): float(p) for a, p in zip(frozen.ages, frozen.p,
-                                                                    strict=True)}
-    suction, discharge = ports(machine, port_timing(machine, op.volume_ratio))
-    fm = FrozenMachine(case.pair, case.sweep(None), PHI, 100e-6, 4,
-                       OGridSpec(columns=512, cells_across_gap=4),
-                       (suction.to_polygons(), discharge.to_polygons()),
-                       op.p_suction_Pa, op.p_discharge_Pa, op.T_suction_K, float(model.dis.T),
-                       model.geo.omega_outer, iterations=1000, initial_p=initial)
+    case = load_case(_slab_case(tmp))
+    table = case_table(case)
+    fm = frozen_machine(case, table, PHI, 100e-6, Grid(512, 4, 4), iterations=1000)
+    frozen = frozen_models(case, table, PHI, ["nozzle"])["nozzle"]
     folder = tmp / "case"
     folder.mkdir()
     plan, built = write_case(fm, folder)
     values = foam.drain(plan.steps, folder)
-    return fm, built, values["checkMesh"], read_outputs(folder, built), frozen
+    closed = [s for s, c in zip(slot_of(frozen, PHI, float(case.pair.period),
+                                        table_origin(case)), frozen.closed, strict=True) if c]
+    return fm, built, values["checkMesh"], read_outputs(folder, built), closed
 
 
 def test_mesh_passes_checkmesh_and_holds_every_chamber(run):
-    fm, built, quality, out, frozen = run
+    fm, built, quality, out, closed = run
     assert quality.ok and quality.cells == built.cells == 512 * 4 * 4
     assert set(built.patches) == {"innerRotor", "outerRotor", "suction", "discharge",
                                   "endPlates"}
-    assert set(built.slots) >= {round((a - PHI) / fm.pair.period) for a in frozen.ages}
+    assert set(built.slots) >= set(fm.initial_p)
 
 
 def test_what_enters_by_one_port_leaves_by_the_other(run):
@@ -93,7 +85,9 @@ def test_what_enters_by_one_port_leaves_by_the_other(run):
     _, _, _, out, _ = run
     flows = out.patches
     assert flows["suction"] > 0.0 > flows["discharge"]  # outward-positive sums
-    assert out.imbalance < 5e-3  # the 0.5 %; measured 7e-4
+    # The 0.5 %; measured 1.8e-3 (the suction flow wanders by 0.2 % from
+    # iteration to iteration under the capped pressure solves, the discharge's does not).
+    assert out.imbalance < 5e-3
     for wall in ("innerRotor", "outerRotor", "endPlates"):
         assert abs(flows[wall]) < 1e-12 * out.inflow
     assert out.iterations == 1000
@@ -111,11 +105,14 @@ def test_chambers_most_open_to_a_port_take_its_pressure(run):
 
 
 def test_closed_chambers_balance_and_lines_flow_downhill(run):
-    fm, built, _, out, frozen = run
-    period = float(fm.pair.period)
-    closed = [round((a - PHI) / period) for a, c in zip(frozen.ages, frozen.closed,
-                                                        strict=True) if c]
+    fm, built, _, out, closed = run
     assert closed
+    for s in closed:
+        # The model's closed chambers own no port in the grid but for faces on a port's
+        # edge (taken by their centres: the chamber about to open holds 0.016 mm2 of the
+        # discharge port's 127 here); a chamber off by a slot would hold a tenth of it.
+        for port, area in built.open_area.items():
+            assert area.get(s, 0.0) < 1e-3 * sum(area.values()), (s, port)
     for s in closed:
         inflow = sum(-f if a == s else f for (a, b), f in out.seals.items() if s in (a, b))
         through = sum(abs(f) for (a, b), f in out.seals.items() if s in (a, b))

@@ -30,7 +30,7 @@ WRAP_KEY = "wrap_{}_deg"
 OPERATING_GEOMETRY_KEYS = {"volume_ratio", "driven", "discharge_port"}
 SECTIONS = {
     "machine", "sweep", "operating", "leakage", "ports", "numerics", "mechanical", "export",
-    "outputs", "cfd", "cfd_chamber", "optimise", "plausibility", "map",
+    "outputs", "cfd", "cfd_chamber", "cfd_machine", "optimise", "plausibility", "map",
 }
 
 
@@ -255,6 +255,10 @@ def validate_stage_sections(data: dict, path: Path, pair: RotorPair | None = Non
         if not isinstance(data["cfd_chamber"], dict):
             raise CaseError(f"[cfd_chamber] in {path} must be a table")
         ChamberSettings.from_section(data["cfd_chamber"], str(path))
+    if "cfd_machine" in data:  # owned by the CFD machine stage
+        from rotorflow.cases.machine_study import validate_section as validate_machine
+
+        validate_machine(data, str(path), pair)
     if "optimise" in data:  # owned by `rotorflow optimise` (its section's own keys)
         from rotorflow.workflow.optimise_spec import check_section
 

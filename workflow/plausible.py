@@ -122,7 +122,7 @@ BY_SUFFIX: dict[str, Range] = {
 #: Any other number: representable and of a magnitude some key could mean.
 ANY = Range(-1e9, 1e9, "", "", "")
 #: Keys whose machine sizes are lengths of parts rather than of a whole rotor.
-PART_MM = ("land_mm", "radius_mm", "port_depth_mm", "seal_length_mm", "gap_mm")
+PART_MM = ("land_mm", "radius_mm", "port_depth_mm", "seal_length_mm", "gap_mm", "layer_mm")
 
 
 def range_of(section: str, key: str) -> Range:

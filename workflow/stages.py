@@ -324,6 +324,28 @@ register(Stage(
     missing=_has_cfd_chamber,
     default=lambda raw: "cfd_chamber" in raw,
 ))
+def _has_cfd_machine(raw: dict) -> str | None:
+    if "cfd_machine" not in raw:
+        return "it has no [cfd_machine] section"
+    return _needs_operating_point(raw)
+
+
+register(Stage(
+    name="cfd.machine",
+    run="rotorflow.cases.machine_study:run_stage",
+    description=("OpenFOAM 3D runs of the whole machine at frozen angles on three grids "
+                 "(Richardson) against the quasi-1D models' frozen states"),
+    reads=("machine", "sweep", "operating", "leakage", "ports", "numerics", "cfd_machine"),
+    # Uses the cfd.leakage stage's fitted flow coefficient when that stage runs too.
+    after=("cfd.leakage",),
+    code=("rotorflow.cases", "rotorflow.postprocess.machine_compare",
+          "rotorflow.postprocess.richardson", "rotorflow.quasi1d", "rotorflow.geometry"),
+    report="rotorflow.postprocess.machine_compare:report_section",
+    report_rank=75,
+    figures="machine_figures.json",
+    missing=_has_cfd_machine,
+    default=lambda raw: "cfd_machine" in raw,
+))
 register(Stage(
     name="report",
     run="rotorflow.workflow.report_stage:run_report",

@@ -14,7 +14,7 @@ import pytest
 
 from rotorflow.geometry import ports as P
 from rotorflow.geometry.machine import SweptMachine
-from rotorflow.geometry.summary import _timing
+from rotorflow.geometry.summary import case_port_timing
 from rotorflow.workflow.case import load_case
 
 from .conftest import CASES
@@ -29,7 +29,7 @@ def built():
     machine = SweptMachine(case.pair, case.sweep(None), PPP)
     assert machine.section.area.max() > 0.0  # the table cut first
     table_cuts = set(case.pair.cut_memo)
-    timing = _timing(case, machine)
+    timing = case_port_timing(case, machine)
     ages = machine.curves.phi - machine.curves.phi[0]
     suction, discharge = P.ports(machine, timing)
     areas = P.open_areas(machine, timing, ages)

@@ -26,7 +26,7 @@ import numpy as np
 
 from rotorflow.geometry.machine import SweptMachine
 from rotorflow.geometry.ports import open_areas
-from rotorflow.geometry.summary import _timing, chamber_table, geometry_figures
+from rotorflow.geometry.summary import case_port_timing, chamber_table, geometry_figures
 from rotorflow.workflow.case import load_case
 
 REPO = Path(__file__).resolve().parents[1]
@@ -75,7 +75,7 @@ def _reference_ports(case, ref):
     """(angles, suction areas, discharge areas) of the reference machine's finely
     sampled ports, against the absolute angle (each resolution has its own birth node)."""
     ages = ref.curves.phi - ref.curves.phi[0]
-    lp, hp = open_areas(ref, _timing(case, ref), ages, steps=REFERENCE_PORT_STEPS)
+    lp, hp = open_areas(ref, case_port_timing(case, ref), ages, steps=REFERENCE_PORT_STEPS)
     return ref.curves.phi, lp, hp
 
 

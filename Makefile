@@ -62,7 +62,7 @@ test: $(STAMP) openfoam ## set up, then run the tests (all tiers but slow)
 	@# fresh clone would otherwise wait ~2 min for it); tests that need it before it is
 	@# ready compile it themselves, the others run in numpy until it is there
 	$(MAKE) --no-print-directory $(NUMBA_STAMP) > $(VENV)/numba-cache.log 2>&1 &
-	$(PY) -m pytest -m "not slow" $(PYTEST_ARGS)
+	$(PY) -m pytest -m "not slow" --durations=20 $(PYTEST_ARGS)
 
 lint: $(STAMP) ## ruff over the whole tree
 	$(VENV)/bin/ruff check .

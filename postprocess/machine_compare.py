@@ -3,8 +3,9 @@ three grids, Richardson-extrapolated, against the quasi-1D model's frozen state 
 each leakage model (issue 16).
 
 Quantities, per angle: each closed chamber's volume-averaged pressure, the net flow
-between each pair of chambers of which at least one is closed (a sealing path: the
-lines between the two, all of them), and the machine's total leakage (discharge plenum
+between each pair of chambers (a sealing path: the lines between the two, all of them;
+those between two chambers open to ports too, which carry the machine's leakage from
+discharge to suction as much as any), and the machine's total leakage (discharge plenum
 to suction plenum).  Each is extrapolated from the three grids with the observed order
 (:mod:`.richardson`); a quantity whose grids oscillate or diverge is compared on the
 finest grid and says so.  The error of a model is ``model / CFD - 1`` (the pressures
@@ -61,7 +62,7 @@ def quantities(angle: dict) -> list[dict]:
             {m: d["pressures"][str(s)] for m, d in models.items()})
     total = [r["leakage_kg_s"] for r in runs]
     seals = [{(int(a), int(b)): float(f) for a, b, f in r["seals"]} for r in runs]
-    pairs = sorted({p for sd in seals for p in sd if p[0] in closed or p[1] in closed})
+    pairs = sorted({p for sd in seals for p in sd})
     for a, b in pairs:
         cfd = [sd.get((a, b), 0.0) for sd in seals]
         if max(abs(v) / t for v, t in zip(cfd, total, strict=True)) < MIN_PATH_SHARE:

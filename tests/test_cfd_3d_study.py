@@ -98,23 +98,27 @@ def _record(exact: dict, order: float, ratio: float, models: dict) -> dict:
         runs.append({"chamber_p": {"4": grids(exact["p4"], 0.03)[k]},
                      "seals": [[3, 4, grids(exact["f34"], 0.2)[k]],
                                [4, 5, grids(exact["f45"], 0.2)[k]],
-                               [1, 2, 1e-9]],
+                               [1, 2, 1e-9],
+                               [6, 7, grids(exact.get("f67", 0.0), 0.2)[k]]],
                      "leakage_kg_s": grids(exact["total"], 0.1)[k]})
     return {"angle_deg": 15.0, "ratio": ratio, "closed": [4], "runs": runs, "models": models}
 
 
 def test_comparison_extrapolates_and_finds_the_closest_model(tmp_path):
-    exact = {"p4": 2.0e5, "f34": -4.0e-4, "f45": -4.0e-4, "total": 8.0e-4}
+    # 6 -> 7: a path between two chambers open to ports (neither is closed), carrying
+    # leakage from the discharge side to the suction side: it is compared too.
+    exact = {"p4": 2.0e5, "f34": -4.0e-4, "f45": -4.0e-4, "f67": 3.0e-4, "total": 8.0e-4}
 
     def model(scale):
         return {"pressures": {"4": exact["p4"] * scale}, "total": exact["total"] * scale,
-                "pairs": {"3,4": exact["f34"] * scale, "4,5": exact["f45"] * scale}}
+                "pairs": {"3,4": exact["f34"] * scale, "4,5": exact["f45"] * scale,
+                          "6,7": exact["f67"] * scale}}
 
     record = _record(exact, 2.0, 1.5, {"near": model(1.01), "far": model(1.2)})
     rows = machine_compare.quantities(record)
     # The stray pair (1, 2) carries nothing: not compared.
     assert [r["name"] for r in rows] == ["chamber 4", "chamber 3 -> 4", "chamber 4 -> 5",
-                                         "total"]
+                                         "chamber 6 -> 7", "total"]
     for r in rows:
         assert r["convergence"] == "monotone" and r["order"] == pytest.approx(2.0, rel=1e-9)
     result = machine_compare.write([record], tmp_path)

@@ -27,6 +27,8 @@ from rotorflow.cases.leakage_stage import matrix_from_section, rotor_machine
 from rotorflow.postprocess.richardson import richardson
 from rotorflow.quasi1d.perfect_gas import PerfectGas
 
+from .plots import time_error_plot
+
 log = logging.getLogger(__name__)
 
 REFINEMENTS = (0.5, 1.0, 2.0, 4.0)
@@ -123,22 +125,11 @@ def run(results_dir: Path) -> list[dict]:
 
 
 def _plot(rows: list[dict], path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    series = []
     for name in dict.fromkeys(r["case"] for r in rows):
         sel = [r for r in rows if r["case"] == name and r["refinement"] != REFINEMENTS[-1]]
-        ax.loglog([r["time_s"] for r in sel], [max(r["error"], 1e-6) for r in sel], "o-",
-                  label=name)
-    ax.axvline(TARGET_TIME_S, color="grey", ls=":")
-    ax.axhline(TARGET_ERROR, color="grey", ls=":")
-    ax.set_xlabel("wall time of one case on 2 cores [s]")
-    ax.set_ylabel("|mass flow / Richardson value - 1|")
-    ax.set_title("CFD leakage mass flow: meshes 0.5, 1, 2 x default")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+        series.append((name, [r["time_s"] for r in sel], [r["error"] for r in sel], "o-"))
+    time_error_plot(path, series, (TARGET_TIME_S, TARGET_ERROR),
+                    xlabel="wall time of one case on 2 cores [s]",
+                    ylabel="|mass flow / Richardson value - 1|",
+                    title="CFD leakage mass flow: meshes 0.5, 1, 2 x default", floor=1e-6)

@@ -29,6 +29,8 @@ from rotorflow.cases.machine_study import LEVELS, StudySettings
 from rotorflow.cases.parallel import Decomposition
 from rotorflow.postprocess.richardson import richardson
 
+from .plots import time_error_plot
+
 log = logging.getLogger(__name__)
 
 CASE_FILE = Path(__file__).resolve().parents[1] / "examples" / "cfd_machine.toml"
@@ -117,24 +119,15 @@ def run(results_dir: Path) -> list[dict]:
 
 
 def _plot(rows: list[dict], path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    series = []
     for procs, marker in ((2, "o-"), (1, "s--")):
         sel = [r for r in rows if r["processes"] == procs and r["grid"] != LEVELS[-1]]
         for key, label in (("leakage_error", "total leakage"),
                            ("pressure_error", "closed-chamber pressure")):
-            ax.loglog([r["time_s"] for r in sel], [max(r[key], 1e-6) for r in sel], marker,
-                      label=f"{label}, {procs} process{'es' if procs > 1 else ''}")
-    ax.axvline(TARGET_TIME_S, color="grey", ls=":")
-    ax.axhline(TARGET_ERROR, color="grey", ls=":")
-    ax.set_xlabel("wall time of one grid at one angle [s]")
-    ax.set_ylabel("|value / Richardson value - 1|")
-    ax.set_title("3D machine CFD at a frozen angle: coarse and medium grids")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+            series.append((f"{label}, {procs} process{'es' if procs > 1 else ''}",
+                           [r["time_s"] for r in sel], [r[key] for r in sel], marker))
+    time_error_plot(path, series, (TARGET_TIME_S, TARGET_ERROR),
+                    xlabel="wall time of one grid at one angle [s]",
+                    ylabel="|value / Richardson value - 1|",
+                    title="3D machine CFD at a frozen angle: coarse and medium grids",
+                    floor=1e-6)

@@ -19,6 +19,8 @@ from rotorflow.geometry.forces import power_split
 from rotorflow.geometry.machine import SweptMachine
 from rotorflow.workflow.case import load_case
 
+from .plots import time_error_plot
+
 REPO = Path(__file__).resolve().parents[1]
 #: (points per period, section refinement) of each row; the library default is (96, 32).
 RESOLUTIONS = ((12, 8), (24, 8), (48, 8), (48, 16), (96, 8), (96, 16), (96, 32),
@@ -68,21 +70,9 @@ def run(results_dir: Path) -> list[dict]:
 
 
 def _plot(rows, path):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6, 4))
-    for key in ("err_A_wc", "err_V", "err_Pi_max"):
-        ax.loglog([r["time_s"] for r in rows], [max(r[key], 1e-16) for r in rows], "o-",
-                  label=key[4:])
-    ax.axvline(TARGET_TIME_S, color="grey", ls=":")
-    ax.axhline(TARGET_ERROR, color="grey", ls=":")
-    ax.set_xlabel("run time of a full case [s]")
-    ax.set_ylabel("relative error vs converged reference")
-    ax.set_title("geometry: default case")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    series = [(key[4:], [r["time_s"] for r in rows], [r[key] for r in rows], "o-")
+              for key in ("err_A_wc", "err_V", "err_Pi_max")]
+    time_error_plot(path, series, (TARGET_TIME_S, TARGET_ERROR),
+                    xlabel="run time of a full case [s]",
+                    ylabel="relative error vs converged reference",
+                    title="geometry: default case", size=(6, 4))

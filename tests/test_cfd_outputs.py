@@ -175,6 +175,19 @@ def test_check_mesh_report_of_a_rejected_mesh():
     q = foam_mesh.parse_check_mesh((DATA / "log.checkMesh.failed").read_text())
     assert not q.ok
     assert any("High aspect ratio" in c for c in q.failed_checks)
+    assert q.max_aspect_ratio == 40000  # read from the flag's own line
+
+
+def test_aspect_flag_is_judged_against_the_callers_limit(tmp_path):
+    """Clearance grids may pass checkMesh's 1000 up to their own limit, not beyond it:
+    the recorded log's 40000 is refused under 1e4 and passes only under 1e5."""
+    log = DATA / "log.checkMesh.failed"
+    with pytest.raises(foam_mesh.MeshCheckError, match="High aspect ratio"):
+        foam_mesh.judge_check_mesh(tmp_path, log)
+    with pytest.raises(foam_mesh.MeshCheckError, match="High aspect ratio"):
+        foam_mesh.judge_check_mesh(tmp_path, log, max_aspect_ratio=1e4)
+    assert foam_mesh.judge_check_mesh(tmp_path, log, max_aspect_ratio=1e5).max_aspect_ratio \
+        == 40000
 
 
 def test_unreadable_check_mesh_report_is_not_ok():

@@ -208,8 +208,14 @@ def _needs_operating_point(raw: dict) -> str | None:
     return "its [operating] section has no operating point (p_suction_bar, ...)"
 
 
-def _has_export(raw: dict) -> str | None:
-    return None if "export" in raw else "it has no [export] section"
+def _needs_section(section: str, operating_point: bool = False):
+    """A stage's ``missing``: the case lacks [section] (or, with ``operating_point``, an
+    operating point)."""
+    def missing(raw: dict) -> str | None:
+        if section not in raw:
+            return f"it has no [{section}] section"
+        return _needs_operating_point(raw) if operating_point else None
+    return missing
 
 
 # The port timing keys: a family whose table carries its port areas (the twin screw)
@@ -274,14 +280,10 @@ register(Stage(
            "operating.discharge_early_opening_deg"),
     code=("rotorflow.geometry",),
     report=f"{_REPORT}:solids_section",
-    missing=_has_export,
+    missing=_needs_section("export"),
     default=lambda raw: "export" in raw,
     check=f"{_IMPL}:check_solids",
 ))
-def _has_cfd(raw: dict) -> str | None:
-    return None if "cfd" in raw else "it has no [cfd] section"
-
-
 register(Stage(
     name="cfd.leakage",
     run="rotorflow.cases.leakage_stage:run_stage",
@@ -298,15 +300,9 @@ register(Stage(
           "rotorflow.geometry.internal_gear", "rotorflow.geometry.curves"),
     report="rotorflow.postprocess.leakage_report:report_section",
     report_rank=60,
-    missing=_has_cfd,
+    missing=_needs_section("cfd"),
     default=lambda raw: "cfd" in raw,
 ))
-def _has_cfd_chamber(raw: dict) -> str | None:
-    if "cfd_chamber" not in raw:
-        return "it has no [cfd_chamber] section"
-    return _needs_operating_point(raw)
-
-
 register(Stage(
     name="cfd.chamber",
     run="rotorflow.cases.chamber_case:run_stage",
@@ -321,15 +317,9 @@ register(Stage(
     report="rotorflow.postprocess.chamber_compare:report_section",
     report_rank=70,
     figures="chamber_figures.json",
-    missing=_has_cfd_chamber,
+    missing=_needs_section("cfd_chamber", operating_point=True),
     default=lambda raw: "cfd_chamber" in raw,
 ))
-def _has_cfd_machine(raw: dict) -> str | None:
-    if "cfd_machine" not in raw:
-        return "it has no [cfd_machine] section"
-    return _needs_operating_point(raw)
-
-
 register(Stage(
     name="cfd.machine",
     run="rotorflow.cases.machine_study:run_stage",
@@ -343,7 +333,7 @@ register(Stage(
     report="rotorflow.postprocess.machine_compare:report_section",
     report_rank=75,
     figures="machine_figures.json",
-    missing=_has_cfd_machine,
+    missing=_needs_section("cfd_machine", operating_point=True),
     default=lambda raw: "cfd_machine" in raw,
 ))
 register(Stage(

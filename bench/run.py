@@ -20,6 +20,7 @@ MODULES = (
     "bench.bench_workflow",
     "bench.bench_process",
     "bench.bench_optimise",
+    "bench.bench_pump_vacuum",
 )
 
 

@@ -15,12 +15,11 @@ mass over suction density times trapped volume); power = shaft power, the model'
 power.  Targets (issue 14): |eta_v error| <= 0.05 absolute and |power error| <= 15 % on
 every predicted row, and the table's trend, eta_v rising with suction pressure.
 
-    python -m rotorflow.postprocess.pump_validation [--rows 0.01,0.11,0.39] [--csv out.csv]
+    python -m bench.bench_pump_vacuum [--rows 0.01,0.11,0.39] [--fit]
 """
 
 from __future__ import annotations
 
-import argparse
 import copy
 import csv
 import math
@@ -30,10 +29,8 @@ from pathlib import Path
 
 from scipy.optimize import brentq
 
-from rotorflow.geometry.summary import build_machine, chamber_table
 from rotorflow.quasi1d import case_settings, simulate
 from rotorflow.quasi1d.settings import Operating
-from rotorflow.workflow.case import case_from_raw, load_toml
 
 ROOT = Path(__file__).resolve().parent.parent
 REFERENCE = ROOT / "tests" / "data" / "reference" / "screw_pump_vacuum.csv"
@@ -59,13 +56,6 @@ def read_table(path: Path = REFERENCE) -> list[Row]:
     with open(path, newline="") as f:
         return [Row(float(r["p_suction_bar"]), float(r["speed_rpm"]), float(r["flow_m3_min"]),
                     float(r["eta_v"]), float(r["power_kW"])) for r in csv.DictReader(f)]
-
-
-def pump_table(case_path: Path = EXAMPLE):
-    """(raw case, chamber table): the geometry is built once, for every row."""
-    raw = load_toml(case_path)
-    case = case_from_raw(raw, case_path)
-    return raw, chamber_table(case, build_machine(case))
 
 
 def predict(raw: dict, table, row: Row, where: str = str(EXAMPLE)) -> dict:
@@ -102,7 +92,7 @@ def compare(rows: list[Row], preds: list[dict], fitted: float = FITTED) -> list[
     """Per row: measured, model, errors (eta_v absolute, power relative) and whether the
     row is a prediction (every row but the fitted one) and meets the targets."""
     out = []
-    for r, p in zip(rows, preds):
+    for r, p in zip(rows, preds, strict=True):
         d_eta = p["eta_v"] - r.eta_v
         d_pow = p["power_kW"] / r.power_kW - 1.0
         predicted = abs(r.p_suction_bar - fitted) > 1e-9
@@ -120,15 +110,16 @@ def rising(values: list[float]) -> bool:
     """The trend test: strictly rising from row to row.  Table 2's own eta_v dips once
     (0.806 -> 0.801 at 0.11 -> 0.13 bar), so the table's trend is taken as rising from
     its first to its last row and the model's as rising at every step."""
-    return all(b > a for a, b in zip(values, values[1:]))
+    return all(b > a for a, b in zip(values, values[1:], strict=False))
 
 
-def run(rows: list[Row], case_path: Path = EXAMPLE) -> list[dict]:
-    raw, table = pump_table(case_path)
-    return compare(rows, [predict(raw, table, r, str(case_path)) for r in rows])
+def run(rows: list[Row], raw: dict, table, where: str = str(EXAMPLE)) -> list[dict]:
+    """Every row through the model on one chamber table (the case's, built by the caller:
+    the case file is the workflow's to read, bench/bench_pump_vacuum.py:pump_table)."""
+    return compare(rows, [predict(raw, table, r, where) for r in rows])
 
 
-def _format(res: list[dict]) -> str:
+def format_report(res: list[dict]) -> str:
     head = (f"{'p_s bar':>8} {'eta_v tab':>9} {'model':>7} {'err':>7} {'P tab kW':>9} "
             f"{'model':>7} {'err %':>7}  role")
     lines = [head]
@@ -141,36 +132,3 @@ def _format(res: list[dict]) -> str:
     eta = [r["eta_v_model"] for r in res]
     lines.append(f"model eta_v rising at every step: {rising(eta)}")
     return "\n".join(lines)
-
-
-def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--rows", help="suction pressures (bar), comma separated; default all")
-    ap.add_argument("--case", type=Path, default=EXAMPLE)
-    ap.add_argument("--csv", type=Path)
-    ap.add_argument("--fit", action="store_true",
-                    help=f"only fit the blow-hole coefficient on the {FITTED} bar row")
-    a = ap.parse_args(argv)
-    rows = read_table()
-    if a.fit:
-        raw, table = pump_table(a.case)
-        row = next(r for r in rows if abs(r.p_suction_bar - FITTED) < 1e-9)
-        print(f"blow-hole coefficient fitted on {FITTED} bar: "
-              f"{fit_coefficient(raw, table, row, where=str(a.case))}")
-        return
-    if a.rows:
-        want = [float(x) for x in a.rows.split(",")]
-        rows = [r for r in rows if any(abs(r.p_suction_bar - w) < 1e-9 for w in want)]
-    t0 = time.perf_counter()
-    res = run(rows, a.case)
-    print(_format(res))
-    print(f"wall time {time.perf_counter() - t0:.1f} s")
-    if a.csv:
-        with open(a.csv, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(res[0]))
-            w.writeheader()
-            w.writerows(res)
-
-
-if __name__ == "__main__":
-    main()

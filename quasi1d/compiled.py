@@ -82,7 +82,7 @@ def _cached() -> bool:
 def _entries():
     from . import kernel
 
-    return (kernel.rhs_fused, kernel.segment_fused)
+    return (kernel.rhs_fused, kernel.segment_fused, kernel.segment_ros23)
 
 
 def _helpers():
@@ -93,7 +93,8 @@ def _helpers():
             coolprop_fluid.table_cell, coolprop_fluid.table_row, kernel.fluid_state,
             kernel.ideal_flow, kernel._add, kernel._node, chamber.spline_at,
             stepping.err_norm, stepping.rk_step, stepping._grow, stepping.segment,
-            kernel.rhs_segment, kernel.rk_step_fused, kernel.rhs_fused)
+            stepping.ros23_step, stepping.jacobian, stepping._w_solve, kernel.rhs_segment,
+            kernel.rk_step_fused, kernel.ros23_step_fused, kernel.rhs_fused)
 
 
 def _inlined():
@@ -112,13 +113,46 @@ def _select(cond, a, b):
     return lambda cond, a, b: np.where(cond, a, b)
 
 
+def _batch_mv(A, x):
+    """numba's :func:`.stepping.batch_mv` (no einsum): loops."""
+    def impl(A, x):
+        out = np.zeros(A.shape[:2])
+        for b in range(A.shape[0]):
+            for i in range(A.shape[1]):
+                for j in range(A.shape[2]):
+                    out[b, i] += A[b, i, j] * x[b, j]
+        return out
+    return impl
+
+
+def _w_inverse(Jc, cols, hd):
+    """numba's :func:`.stepping.w_inverse` (np.linalg.inv of one matrix at a time)."""
+    def impl(Jc, cols, hd):
+        nc = cols.size
+        out = np.empty((Jc.shape[0], nc, nc))
+        M = np.empty((nc, nc))
+        for b in range(Jc.shape[0]):
+            for i in range(nc):
+                for j in range(nc):
+                    M[i, j] = (1.0 if i == j else 0.0) - hd * Jc[b, cols[i], j]
+            try:
+                out[b] = np.linalg.inv(M)
+            except Exception:  # singular (np.linalg.LinAlgError)
+                out[b] = np.nan
+        return out
+    return impl
+
+
 class Compiled(NamedTuple):
     """The compiled entry points: the fused right-hand side (one call per evaluation) and
-    a whole segment's explicit Runge-Kutta integration (one call per segment)."""
+    a whole segment's integration by an explicit Runge-Kutta method or by ros23 (one call
+    per segment)."""
 
     rhs: object
-    rk_step: object  # the step's identity: integrate dispatches segments by it
+    rk_step: object  # the steps' identities: integrate dispatches segments by them
     segment: object
+    ros23_step: object
+    segment_ros23: object
 
 
 def _compile():
@@ -128,7 +162,7 @@ def _compile():
     except ImportError:
         _state["failed"] = True
         return None
-    from . import flows, kernel
+    from . import flows, kernel, stepping
 
     numba.config.CACHE_DIR = str(_cache_dir())
     inline = _inlined()
@@ -137,13 +171,16 @@ def _compile():
         # counts references to its array arguments (atomic operations), which cost the
         # loops of the right-hand side more than the work inside them
         register_jitable(inline="always" if fn in inline else "never")(fn)
-    if not _state.get("select"):  # (once a process: a second overload would be ambiguous)
+    if not _state.get("overloads"):  # (once a process: a second would be ambiguous)
         overload(flows.select)(_select)
-        _state["select"] = True
+        overload(stepping.batch_mv)(_batch_mv)
+        overload(stepping.w_inverse)(_w_inverse)
+        _state["overloads"] = True
     # error_model "numpy": a trial state's division by zero gives inf/nan (rejected by
     # the step control) as in numpy, not an exception
     jit = numba.njit(cache=True, error_model="numpy")
-    return Compiled(jit(kernel.rhs_fused), kernel.rk_step_fused, jit(kernel.segment_fused))
+    return Compiled(jit(kernel.rhs_fused), kernel.rk_step_fused, jit(kernel.segment_fused),
+                    kernel.ros23_step_fused, jit(kernel.segment_ros23))
 
 
 def warm_up() -> None:

@@ -236,8 +236,9 @@ def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, 
 
 
 # -- one segment in one compiled call (issue 19) ---------------------------------------
-# args = (tableau (c, A, b, e), geometry (ChamberModel.fused_geometry), the arguments of
-# rhs_fused after its geometry (ChamberModel._fused_args)).
+# args = (the step's own: the tableau (c, A, b, e) or ros23's (atol, Jacobian columns),
+# geometry (ChamberModel.fused_geometry), the arguments of rhs_fused after its geometry
+# (ChamberModel._fused_args)).
 
 def rhs_segment(theta, y, args):
     """:func:`rhs_fused` at angle ``theta`` with the segment's geometry evaluated here:
@@ -263,3 +264,13 @@ def rk_step_fused(t, y, h, k1, args):
 def segment_fused(args, t, t_end, ends, y, k1, h, rtol, atol, order, budget, slack, record):
     return stepping.segment(rk_step_fused, args, t, t_end, ends, y, k1, h, rtol, atol, order,
                             budget, slack, record)
+
+
+def ros23_step_fused(t, y, h, k1, args):
+    atol, cols = args[0]  # (the step's own atol: the Jacobian's steps)
+    return stepping.ros23_step(rhs_segment, args, t, y, h, k1, atol, cols)
+
+
+def segment_ros23(args, t, t_end, ends, y, k1, h, rtol, atol, order, budget, slack, record):
+    return stepping.segment(ros23_step_fused, args, t, t_end, ends, y, k1, h, rtol, atol,
+                            order, budget, slack, record)

@@ -8,9 +8,9 @@ Numba is imported lazily and its machine code cached on disk (``cache=True``).  
 from its cache, loading costs a process ~0.5 s CPU (numba's import, its typing
 registries, scipy.linalg for the matrix products), five times what one ideal-port
 operating point of the default case takes in numpy; compiling into an empty cache costs
-~30 s CPU.  So in "auto" (the default) a process
-starts in numpy and loads the compiled function once its cycle solutions have taken
-COMPILE_AFTER_S (a performance map, a sweep, an optimisation, a benchmark) and only if
+~80 s CPU (the explicit and the Rosenbrock segment loops).  So in "auto" (the default) a
+process starts in numpy and loads the compiled function once its cycle solutions have
+taken COMPILE_AFTER_S (a performance map, a sweep, an optimisation, a benchmark) and only if
 the cache holds it; each operating point is solved wholly by one of the two, which
 agree to round-off.  The cache is filled by ``python -m rotorflow.quasi1d.compiled``
 (or by any run with ``ROTORFLOW_COMPILED=1``, which compiles from the first point);
@@ -185,7 +185,7 @@ def _compile():
 
 def warm_up() -> None:
     """Fill numba's cache: solve one small cycle of each fluid kind with the compiled
-    right-hand side (``python -m rotorflow.quasi1d.compiled``, ~30 s CPU once)."""
+    right-hand side (``python -m rotorflow.quasi1d.compiled``, ~80 s CPU once)."""
     from .settings import Leakage, Operating, Ports
     from .simulate import simulate
     from .synthetic import sin2_table

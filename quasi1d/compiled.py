@@ -8,17 +8,17 @@ Numba is imported lazily and its machine code cached on disk (``cache=True``).  
 from its cache, loading costs a process ~0.5 s CPU (numba's import, its typing
 registries, scipy.linalg for the matrix products), five times what one ideal-port
 operating point of the default case takes in numpy; compiling into an empty cache costs
-~2 min CPU (the segment loop ~1.5 of them).  So in "auto" (the default) a process
-starts in numpy and loads the compiled function once its cycle solutions have taken
-COMPILE_AFTER_S (a performance map, a sweep, an optimisation, a benchmark) and only if
+~80 s CPU (the explicit and the Rosenbrock segment loops).  So in "auto" (the default) a
+process starts in numpy and loads the compiled function once its cycle solutions have
+taken COMPILE_AFTER_S (a performance map, a sweep, an optimisation, a benchmark) and only if
 the cache holds it; each operating point is solved wholly by one of the two, which
 agree to round-off.  The cache is filled by ``python -m rotorflow.quasi1d.compiled``
 (or by any run with ``ROTORFLOW_COMPILED=1``, which compiles from the first point);
 ``=0`` never compiles (the numpy reference).  Without numba the model stays in numpy.
 
 The cache sits in numba's cache directory (NUMBA_CACHE_DIR, else ~/.cache) under a
-hash of the sources compiled: numba checks only the compiled function's own file, not
-the helpers it inlines from the fluid and flow modules.
+hash of the sources compiled and of this module: numba checks only the compiled
+function's own file, not the helpers it inlines from the fluid and flow modules.
 """
 
 from __future__ import annotations
@@ -27,8 +27,11 @@ import functools
 import hashlib
 import inspect
 import os
+import sys
 from pathlib import Path
 from typing import NamedTuple
+
+import numpy as np
 
 # CPU seconds of cycle solutions after which a process loads the compiled function (see
 # the docstring): about numba's loading cost, so that no process spends more than twice
@@ -64,7 +67,8 @@ def kernel_for_point():
 def _cache_dir() -> Path:
 
     digest = hashlib.sha256()
-    for fn in (*_helpers(), *_entries()):
+    # this module's own source too: it decides what is inlined and how select compiles
+    for fn in (*_helpers(), *_entries(), sys.modules[__name__]):
         digest.update(inspect.getsource(fn).encode())
     base = os.environ.get("NUMBA_CACHE_DIR") or str(Path.home() / ".cache")
     return Path(base) / "rotorflow-numba" / digest.hexdigest()[:16]
@@ -78,51 +82,110 @@ def _cached() -> bool:
 def _entries():
     from . import kernel
 
-    return (kernel.rhs_fused, kernel.segment_fused)
+    return (kernel.rhs_fused, kernel.segment_fused, kernel.segment_ros23)
 
 
 def _helpers():
     from . import chamber, coolprop_fluid, dry_air, flows, kernel, stepping
 
-    return (flows._x_eff, flows.nozzle_critical_ratio, flows._psi, flows._psi_k,
-            flows.nozzle_constants, flows.nozzle_f_c, flows.fanno_f, dry_air.table_interp,
-            coolprop_fluid.table_interp, kernel.fluid_state, kernel.nodes, kernel.upstream,
-            kernel.mass_flows, kernel.enthalpy_flows, kernel.balances, kernel.ideal_ports,
-            chamber.spline_at, stepping.err_norm, stepping.rk_step, stepping._grow,
-            stepping.segment, kernel.rhs_segment, kernel.rk_step_fused,
-            kernel.rhs_fused)
+    return (flows._x_eff, flows.nozzle_critical_ratio, flows._psi, flows.nozzle_constants,
+            flows.nozzle_f_c, flows.fanno_f, dry_air.table_interp, dry_air._lerp,
+            coolprop_fluid.table_cell, coolprop_fluid.table_row, kernel.fluid_state,
+            kernel.ideal_flow, kernel._add, kernel._node, chamber.spline_at,
+            stepping.err_norm, stepping.rk_step, stepping._grow, stepping.segment,
+            stepping.ros23_step, stepping.jacobian, stepping._w_solve, kernel.rhs_segment,
+            kernel.rk_step_fused, kernel.ros23_step_fused, kernel.rhs_fused)
+
+
+def _inlined():
+    from . import coolprop_fluid, dry_air, kernel
+
+    return (kernel._add, kernel._node, kernel.fluid_state, dry_air.table_interp,
+            dry_air._lerp, coolprop_fluid.table_row)
+
+
+def _select(cond, a, b):
+    """numba's :func:`.flows.select`: the conditional on scalars, np.where on arrays."""
+    from numba.core import types
+
+    if isinstance(cond, types.Boolean):
+        return lambda cond, a, b: a if cond else b
+    return lambda cond, a, b: np.where(cond, a, b)
+
+
+def _batch_mv(A, x):
+    """numba's :func:`.stepping.batch_mv` (no einsum): loops."""
+    def impl(A, x):
+        out = np.zeros(A.shape[:2])
+        for b in range(A.shape[0]):
+            for i in range(A.shape[1]):
+                for j in range(A.shape[2]):
+                    out[b, i] += A[b, i, j] * x[b, j]
+        return out
+    return impl
+
+
+def _w_inverse(Jc, cols, hd):
+    """numba's :func:`.stepping.w_inverse` (np.linalg.inv of one matrix at a time)."""
+    def impl(Jc, cols, hd):
+        nc = cols.size
+        out = np.empty((Jc.shape[0], nc, nc))
+        M = np.empty((nc, nc))
+        for b in range(Jc.shape[0]):
+            for i in range(nc):
+                for j in range(nc):
+                    M[i, j] = (1.0 if i == j else 0.0) - hd * Jc[b, cols[i], j]
+            try:
+                out[b] = np.linalg.inv(M)
+            except Exception:  # singular (np.linalg.LinAlgError)
+                out[b] = np.nan
+        return out
+    return impl
 
 
 class Compiled(NamedTuple):
     """The compiled entry points: the fused right-hand side (one call per evaluation) and
-    a whole segment's explicit Runge-Kutta integration (one call per segment)."""
+    a whole segment's integration by an explicit Runge-Kutta method or by ros23 (one call
+    per segment)."""
 
     rhs: object
-    rk_step: object  # the step's identity: integrate dispatches segments by it
+    rk_step: object  # the steps' identities: integrate dispatches segments by them
     segment: object
+    ros23_step: object
+    segment_ros23: object
 
 
 def _compile():
     try:
         import numba
-        from numba.extending import register_jitable
+        from numba.extending import overload, register_jitable
     except ImportError:
         _state["failed"] = True
         return None
-    from . import kernel
+    from . import flows, kernel, stepping
 
     numba.config.CACHE_DIR = str(_cache_dir())
+    inline = _inlined()
     for fn in _helpers():
-        register_jitable(fn)
+        # the small helpers that take arrays, inlined: a call of a compiled function
+        # counts references to its array arguments (atomic operations), which cost the
+        # loops of the right-hand side more than the work inside them
+        register_jitable(inline="always" if fn in inline else "never")(fn)
+    if not _state.get("overloads"):  # (once a process: a second would be ambiguous)
+        overload(flows.select)(_select)
+        overload(stepping.batch_mv)(_batch_mv)
+        overload(stepping.w_inverse)(_w_inverse)
+        _state["overloads"] = True
     # error_model "numpy": a trial state's division by zero gives inf/nan (rejected by
     # the step control) as in numpy, not an exception
     jit = numba.njit(cache=True, error_model="numpy")
-    return Compiled(jit(kernel.rhs_fused), kernel.rk_step_fused, jit(kernel.segment_fused))
+    return Compiled(jit(kernel.rhs_fused), kernel.rk_step_fused, jit(kernel.segment_fused),
+                    kernel.ros23_step_fused, jit(kernel.segment_ros23))
 
 
 def warm_up() -> None:
     """Fill numba's cache: solve one small cycle of each fluid kind with the compiled
-    right-hand side (``python -m rotorflow.quasi1d.compiled``, ~2 min CPU once)."""
+    right-hand side (``python -m rotorflow.quasi1d.compiled``, ~80 s CPU once)."""
     from .settings import Leakage, Operating, Ports
     from .simulate import simulate
     from .synthetic import sin2_table

@@ -188,25 +188,32 @@ class TabulatedFluid:
 
 def table_interp(rho, u, x0, dx, u0, du, nu, table, r0, r1):
     """Rows r0..r1-1 of the table (ln p, T, kappa, dp/drho|u, dp/du|rho) interpolated
-    bilinearly in (ln rho, u) at arrays rho, u: (r1 - r0, *rho.shape).  Plain numpy that
-    :mod:`.compiled` also compiles."""
-    nx = table.shape[1] // nu
-    fx = (np.log(rho.ravel()) - x0) / dx
-    fu = (u.ravel() - u0) / du
-    i = np.minimum(np.maximum(fx.astype(np.intp), 0), nx - 2)
-    j = np.minimum(np.maximum(fu.astype(np.intp), 0), nu - 2)
-    tx = fx - i
-    tu = fu - j
-    k = i * nu + j
-    out = np.empty((r1 - r0, fx.size))
+    bilinearly in (ln rho, u) at arrays rho, u: (r1 - r0, *rho.shape)."""
+    k, tx, tu = table_cell(rho, u, x0, dx, u0, du, nu, table.shape[1] // nu)
+    out = np.empty((r1 - r0,) + np.shape(rho))
     for r in range(r0, r1):
-        t = table[r]
-        c00 = t[k]
-        c10 = t[k + nu]
-        a = c00 + tu * (t[k + 1] - c00)
-        b = c10 + tu * (t[k + nu + 1] - c10)
-        out[r - r0] = a + tx * (b - a)
-    return out.reshape((r1 - r0,) + rho.shape)
+        out[r - r0] = table_row(table, r, k, tx, tu, nu)
+    return out
+
+
+def table_cell(rho, u, x0, dx, u0, du, nu, nx):
+    """The table's cell (index of its first node) and the position in it at rho, u
+    (arrays or scalars: the compiled right-hand side calls it per slot, :mod:`.compiled`)."""
+    fx = (np.log(rho) - x0) / dx
+    fu = (u - u0) / du
+    # truncate, then clip: a NaN state lands in the first cell (never out of the table)
+    i = np.minimum(np.maximum(np.intp(fx), 0), nx - 2)
+    j = np.minimum(np.maximum(np.intp(fu), 0), nu - 2)
+    return i * nu + j, fx - i, fu - j
+
+
+def table_row(table, r, k, tx, tu, nu):
+    """Row r of the table interpolated bilinearly in the cells k at (tx, tu)."""
+    c00 = table[r, k]
+    c10 = table[r, k + nu]
+    a = c00 + tu * (table[r, k + 1] - c00)
+    b = c10 + tu * (table[r, k + nu + 1] - c10)
+    return a + tx * (b - a)
 
 
 @functools.lru_cache(maxsize=16)

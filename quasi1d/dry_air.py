@@ -173,17 +173,18 @@ class ThermallyPerfectGas:
 
 
 def table_interp(u, u0, du, rows):
-    """Rows (T, kappa, 1/cv) of the table interpolated linearly at u (an array, any
-    shape): (3, *u.shape).  Plain numpy that :mod:`.compiled` also compiles."""
-    nu = rows.shape[1]
-    f = (u.ravel() - u0) / du
-    j = np.minimum(np.maximum(f.astype(np.intp), 0), nu - 2)
+    """Rows (T, kappa, 1/cv) of the table interpolated linearly at u (an array of any
+    shape, or a scalar: the compiled right-hand side calls it per slot, :mod:`.compiled`)."""
+    f = (u - u0) / du
+    # truncate, then clip: a NaN u lands in the first cell (never out of the table)
+    j = np.minimum(np.maximum(np.intp(f), 0), rows.shape[1] - 2)
     t = f - j
-    out = np.empty((3, f.size))
-    for r in range(3):
-        c0 = rows[r][j]
-        out[r] = c0 + t * (rows[r][j + 1] - c0)
-    return out.reshape((3,) + u.shape)
+    return _lerp(rows, 0, j, t), _lerp(rows, 1, j, t), _lerp(rows, 2, j, t)
+
+
+def _lerp(rows, r, j, t):
+    c0 = rows[r, j]
+    return c0 + t * (rows[r, j + 1] - c0)
 
 
 @functools.lru_cache(maxsize=1)

@@ -59,6 +59,18 @@ _D2 = DELTA_X * DELTA_X
 K_ONE_GAP = 1.0e-6
 
 
+# The functions below that the compiled right-hand side calls (:mod:`.compiled`) take
+# arrays or scalars alike: numpy runs them on whole arrays, numba inside loops over the
+# batch and the flows, one element at a time (no temporaries).  So they are written
+# without np.where: a choice between two values is :func:`select`.
+
+
+def select(cond, a, b):
+    """np.where(cond, a, b); compiled, on scalars, the plain conditional (numba's np.where
+    returns an array even for scalars; see :mod:`.compiled`)."""
+    return np.where(cond, a, b)
+
+
 def _x_eff(x):
     y = 1.0 - x
     return 1.0 - y * y / np.sqrt(y * y + _D2)
@@ -83,11 +95,10 @@ def _psi_k(x, k):
 
 
 def nozzle_constants(k):
-    """(critical ratio, 2k / (k - 1), 1 / k) of :func:`_psi` for an array of exponents k
-    (per node: the flows gather them, one power per node instead of per flow)."""
-    near = np.abs(k - 1.0) < K_ONE_GAP
-    if near.any():  # HEM two-phase exponents pass through 1 (module docstring)
-        k = np.where(near, 1.0 + np.copysign(K_ONE_GAP, k - 1.0), k)
+    """(critical ratio, 2k / (k - 1), 1 / k) of :func:`_psi` for exponents k (an array or
+    a scalar; per node: the flows gather them, one power per node instead of per flow)."""
+    # HEM two-phase exponents pass through 1 (module docstring)
+    k = select(np.abs(k - 1.0) < K_ONE_GAP, 1.0 + np.copysign(K_ONE_GAP, k - 1.0), k)
     return nozzle_critical_ratio(k), 2.0 * k / (k - 1.0), 1.0 / k
 
 
@@ -104,7 +115,8 @@ def nozzle_f(x, k):
 
 
 def nozzle_f_c(x, xc, c, ik):
-    """:func:`nozzle_f` from the exponent's :func:`nozzle_constants` (arrays like x)."""
+    """:func:`nozzle_f` from the exponent's :func:`nozzle_constants` (arrays like x, or
+    scalars)."""
     return _psi(_x_eff(x), xc, c, ik)
 
 

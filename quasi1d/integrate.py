@@ -25,7 +25,6 @@ period map is one fixed smooth function while Newton's method converges on it.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -101,8 +100,6 @@ class PeriodRun:
     n_rhs: int
     n_rejected: int
     method: str = ""
-    atol: np.ndarray = None
-    jac: list = None  # ros23: [segment, uses, J, dfdt]
     trace_theta: list = field(default_factory=list)
     trace_y: list = field(default_factory=list)
     replayed: bool = False
@@ -150,7 +147,7 @@ def _period(model, y0, method, rtol, atol, replay, record, max_steps, h0, stiff_
         if method in ("radau", "bdf"):
             y, ends = _scipy(model, seg, y, method, rtol, atol, run, record)
         else:
-            step, stages, order = _stepper(model, seg, method, run)
+            step, stages, order = _stepper(model, seg, method, atol, y.shape[1])
             ok = False
             if replay is not None:
                 # the previous period's steps, so that the period map stays one function;
@@ -171,21 +168,32 @@ def _period(model, y0, method, rtol, atol, replay, record, max_steps, h0, stiff_
     return run
 
 
-def _stepper(model, seg, method, run):
+def _stepper(model, seg, method, atol, S):
     """step(t, y, h, k1, args) of ``method`` in ``seg`` with its arguments, the right-hand
-    sides a step evaluates and its order: the compiled fused Runge-Kutta step where the
-    model holds the compiled kernel and the segment is fusable, else Python."""
-    if method == "ros23":
-        return (lambda t, y, h, k1, _: _ros23_step(model, seg, t, y, h, k1, run), None), 4, 3
-    tab = TABLEAUS[method]
+    sides a step evaluates (ros23: three and a Jacobian) and its order: the compiled
+    fused step where the model holds the compiled kernel and the segment is fusable,
+    else Python.  ``atol``: the absolute tolerance (the Jacobian's steps), S the state's
+    size."""
     fast = getattr(model, "fast", {}).get("kernel")
     geo = model.fused_geometry(seg) if fast is not None else None
-    if geo is not None:
-        return (fast.rk_step, ((tab.c, tab.A, tab.b, tab.e), geo, model._fused_args(seg))), \
-            len(tab.c), tab.order
 
     def rhs(t, y, _):
         return model.rhs(t, y, seg)
+
+    if method == "ros23":
+        # the Jacobian's columns: the chamber states of the active slots
+        cols = model.state_columns(seg) if hasattr(model, "state_columns") else np.arange(S)
+        if geo is not None:
+            return (fast.ros23_step, ((atol, cols), geo, model._fused_args(seg))), 4, 3
+
+        def step(t, y, h, k1, _):
+            return stepping.ros23_step(rhs, None, t, y, h, k1, atol, cols)
+
+        return (step, None), 4, 3
+    tab = TABLEAUS[method]
+    if geo is not None:
+        return (fast.rk_step, ((tab.c, tab.A, tab.b, tab.e), geo, model._fused_args(seg))), \
+            len(tab.c), tab.order
 
     def step(t, y, h, k1, _):
         return stepping.rk_step(rhs, None, tab.c, tab.A, tab.b, tab.e, t, y, h, k1)
@@ -201,88 +209,13 @@ def _run_segment(model, seg, step, ends, y, k1, h, rtol, atol, order, budget, sl
             budget, slack, record)
     if fast is not None and step[0] is fast.rk_step:
         return fast.segment(step[1], *rest)
+    if fast is not None and step[0] is fast.ros23_step:
+        return fast.segment_ros23(step[1], *rest)
     return stepping.segment(step[0], step[1], *rest)
-
-
-# Rosenbrock method of Shampine & Reichelt (MATLAB ode23s): L-stable, order 2 with a
-# third-order error estimate, three right-hand sides and one Jacobian per step.
-_D = 1.0 / (2.0 + math.sqrt(2.0))
-_E32 = 6.0 + math.sqrt(2.0)
-# finite-difference steps of the Jacobian (relative to the tolerance scale) and of df/dt
-JAC_STEP = 1.0e-7
-JAC_T_STEP = 1.0e-7
-# Steps one Jacobian serves (renewed at every segment start and after a rejection).  The
-# formula is a W-method, so reuse keeps its order, but measured on nozzle-port cycles a
-# stale Jacobian cost more steps and cycles than it saved: a fresh one every step.
-JAC_REUSE = 1  # (so a rejected step, retried at the same point, takes a new one too)
-
-
-def _jacobian(model, seg, t, y, f0, atol):
-    """df/dy (its non-zero columns and their indices) and df/dt of every batch member by
-    finite differences, in two batched calls.
-
-    Only the columns the right-hand side depends on are perturbed (the chamber states of
-    the active slots; nothing depends on the accumulators or on inactive slots).  Each
-    member gets its own Jacobian, so that a batch of perturbed states (the cycle
-    solver's finite-difference Jacobian of the period map) sees the same method as an
-    unperturbed one."""
-    B, S = y.shape
-    cols = model.state_columns(seg) if hasattr(model, "state_columns") else np.arange(S)
-    nc = cols.size
-    delta = JAC_STEP * (np.abs(y[:, cols]) + atol[cols])  # (B, nc)
-    Y = np.repeat(y[:, None, :], nc, axis=1)  # (B, nc, S)
-    Y[:, np.arange(nc), cols] += delta
-    F = model.rhs(t, Y.reshape(B * nc, S), seg).reshape(B, nc, S)
-    ft = model.rhs(t + JAC_T_STEP, y, seg)
-    if not (np.all(np.isfinite(F)) and np.all(np.isfinite(ft))):
-        return None, None
-    # only the perturbed columns: every other column of df/dy is zero
-    Jc = np.swapaxes((F - f0[:, None, :]) / delta[:, :, None], 1, 2)  # (B, S, nc)
-    return (Jc, cols), (ft - f0) / JAC_T_STEP
-
-
-def _ros23_step(model, seg, t, y, h, F0, run):
-    jac = run.jac
-    if jac is None or jac[0] is not seg or jac[1] >= JAC_REUSE or jac[2][0].shape[0] != y.shape[0]:
-        J, T = _jacobian(model, seg, t, y, F0, run.atol)
-        run.jac = None if J is None else [seg, 0, J, T]
-    else:
-        J, T = jac[2], jac[3]
-    if run.jac is not None:
-        run.jac[1] += 1
-    if J is None or not np.all(np.isfinite(F0)):
-        return y, F0, np.full_like(y, np.inf)
-    # W = I - h d J with J non-zero in the columns c only: W k = R gives
-    # (I - h d J_cc) k_c = R_c, and then k = R + h d J[:, c] k_c (rows c included), so
-    # only the (nc, nc) block is inverted (the accumulators and idle slots need none)
-    Jc, cols = J
-    hd = h * _D
-    try:
-        Wi = np.linalg.inv(np.eye(cols.size) - hd * Jc[:, cols, :])  # (B, nc, nc)
-    except np.linalg.LinAlgError:
-        return y, F0, np.full_like(y, np.inf)
-
-    def solve(R):
-        kc = np.einsum("bij,bj->bi", Wi, R[:, cols])
-        return R + hd * np.einsum("bij,bj->bi", Jc, kc)
-
-    hdT = hd * T
-    k1 = solve(F0 + hdT)
-    F1 = model.rhs(t + 0.5 * h, y + 0.5 * h * k1, seg)
-    if not np.all(np.isfinite(F1)):
-        return y, F0, np.full_like(y, np.inf)
-    k2 = solve(F1 - k1) + k1
-    y_new = y + h * k2
-    F2 = model.rhs(t + h, y_new, seg)
-    if not np.all(np.isfinite(F2)):
-        return y, F0, np.full_like(y, np.inf)
-    k3 = solve(F2 - _E32 * (k2 - F1) - 2.0 * (k1 - F0) + hdT)
-    return y_new, F2, (h / 6.0) * (k1 - 2.0 * k2 + k3)
 
 
 def _adaptive(model, seg, y, step, stages, order, rtol, atol, h, run, record, budget,
               stiff_error):
-    run.atol = atol
     status, t, y, h, ends, trace, tried, rejected = _run_segment(
         model, seg, step, np.empty(0), y, model.rhs(seg.start, y, seg),
         np.nan if h is None else float(h), rtol, atol, order, budget[0], 0.0, record)
@@ -305,7 +238,6 @@ def _adaptive(model, seg, y, step, stages, order, rtol, atol, h, run, record, bu
 
 
 def _replay(model, seg, y, step, stages, rtol, atol, ends, run, record, slack):
-    run.atol = atol
     ends = np.asarray(ends, dtype=float)
     status, _, y, _, _, trace, taken, _ = _run_segment(
         model, seg, step, ends, y, model.rhs(seg.start, y, seg), np.nan, rtol, atol, 0,

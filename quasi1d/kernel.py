@@ -1,19 +1,23 @@
 """The chamber equations' right-hand side on flat arrays: the pieces
 :meth:`.model.ChamberModel.rhs` is made of, and :func:`rhs_fused`, all of them in one
-function for the segments that need nothing else (see :func:`fusable`).
+compiled function for the segments that need nothing else (see :func:`fusable`).
 
-Every function here is plain numpy on arrays of the batch (B, ...) and also compiles
-with numba (:mod:`.compiled`): the model calls these functions uncompiled, piece by
-piece, with its other terms (calibrated or rarefied leakage, moving walls, oil) in
-between; where a segment has none of those, the compiled :func:`rhs_fused` evaluates
-the same pieces in one call.  So each piece of physics is written once.
+The physics is written once, element-wise (the fluid's state :func:`fluid_state`, the
+nozzle and Fanno fluxes of :mod:`.flows`, the ideal port's flow :func:`ideal_flow`):
+numpy calls it on whole arrays of the batch (B, ...) in the model's piecewise
+right-hand side, with its other terms (calibrated or rarefied leakage, moving walls,
+oil) in between; :func:`rhs_fused`, compiled by numba (:mod:`.compiled`), calls it one
+element at a time inside loops over the batch, the slots and the flows.  Written in
+numpy style, the compiled function was bound by its ~60 temporaries a call and by
+dense products with the flow maps; the loops have none and add each flow to the five
+entries of dy it touches.
 
-Measured on the default case (8 slots, 52 flows of which ~24 open): 31 us a call
-against ~120 us in numpy for the cycle solver's batch of 15 states; 16 against 55 us
-with nozzle ports and no leakage (7 flows); no faster than numpy for the 240 states of a
-Rosenbrock Jacobian, where numpy's vectorised power function outruns numba's scalar one.
-The rest of a compiled call is the numba versions of the gathers (~1.4 ns an element),
-the powers of the nozzle formula (~10 ns) and five small matrix products (~1.5 us each).
+Measured on the default case (8 slots, 47 flows of which ~25 open) on a loaded
+machine: ~20 us a call for the cycle solver's batch of 15 states (31 us numpy-style
+compiled, ~120 us numpy), 1.8 us for one state; with nozzle ports and no leakage (6
+flows) ~9 us for 15 states and ~140 us for the 240 of a Rosenbrock Jacobian (~180 us
+numpy-style).  What is left is the arithmetic: the nozzle formula's power (~12 ns) and
+square roots per flow, the fluid table per slot.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ import numpy as np
 
 from . import flows, stepping
 from .chamber import spline_at
-from .coolprop_fluid import table_interp as table_2d
+from .coolprop_fluid import table_cell, table_row
 from .dry_air import table_interp as table_1d
 
 # Fluid kinds of fluid_state (the fluids' kernel_params)
@@ -30,19 +34,22 @@ PERFECT, TABLE_1D, TABLE_2D = 0, 1, 2
 
 
 def fluid_state(kind, par, tab, rho, u):
-    """p, T, kappa, (dp/drho)_u and (dp/du)_rho at arrays rho, u of one of the three
-    fluids (:mod:`.fluids`): the perfect gas (par: gamma - 1, 1 / cv, gamma), dry air's
-    table in u (par: u0, du, R), a CoolProp table in (ln rho, u) (par: x0, dx, u0, du,
-    nodes in u)."""
+    """p, T, kappa, (dp/drho)_u and (dp/du)_rho at rho, u (scalars or arrays) of one of
+    the three fluids (:mod:`.fluids`): the perfect gas (par: gamma - 1, 1 / cv, gamma),
+    dry air's table in u (par: u0, du, R), a CoolProp table in (ln rho, u) (par: x0, dx,
+    u0, du, nodes in u)."""
     if kind == PERFECT:
         g1 = par[0]
-        return g1 * rho * u, u * par[1], np.full_like(rho, par[2]), g1 * u, g1 * rho
+        return g1 * rho * u, u * par[1], par[2] + 0.0 * rho, g1 * u, g1 * rho
     if kind == TABLE_1D:
-        v = table_1d(u, par[0], par[1], tab)
+        T, kap, icv = table_1d(u, par[0], par[1], tab)
         R = par[2]
-        return R * rho * v[0], v[0], v[1], R * v[0], R * rho * v[2]
-    v = table_2d(rho, u, par[0], par[1], par[2], par[3], int(par[4]), tab, 0, 5)
-    return np.exp(v[0]), v[1], v[2], v[3], v[4]
+        return R * rho * T, T, kap, R * T, R * rho * icv
+    nu = int(par[4])
+    k, tx, tu = table_cell(rho, u, par[0], par[1], par[2], par[3], nu, tab.shape[1] // nu)
+    return (np.exp(table_row(tab, 0, k, tx, tu, nu)), table_row(tab, 1, k, tx, tu, nu),
+            table_row(tab, 2, k, tx, tu, nu), table_row(tab, 3, k, tx, tu, nu),
+            table_row(tab, 4, k, tx, tu, nu))
 
 
 def nodes(x, suction, discharge):
@@ -92,28 +99,32 @@ def ideal_ports(dy, pdV, V, Vt, rho, u, p, h, pr, pu, c, p_pl, h_pl, mx, mxe, om
                 relax, n, gamma):
     """Add the ideal ports' flows to dy in place (those that hold the open slots c at
     their plenum's pressure p_pl, gas of enthalpy h_pl flowing in); returns them (kg/s).
-
-    The flow x into slot c makes dp/dt = (p_pl - p) omega / relax (the drift correction):
-    with dm/dt = A + x and dU/dt = Bh + x h_x - p dV/dt, dp/dt = pr drho/dt + pu du/dt.
     ``gamma`` > 0: a perfect gas of that gamma (then pr, pu are not read)."""
-    A = dy[:, c] * omega  # other mass flows in (kg/s)
-    Bh = (dy[:, n + c] + pdV[:, c]) * omega  # other enthalpy + heat (W)
-    rc, uc, pc, hc = rho[:, c], u[:, c], p[:, c], h[:, c]
+    x, hx = ideal_flow(dy[:, c] * omega, (dy[:, n + c] + pdV[:, c]) * omega, rho[:, c],
+                       u[:, c], p[:, c], h[:, c], pr[:, c], pu[:, c], V[..., c], Vt[..., c],
+                       p_pl, h_pl, omega, relax, gamma)
+    dy += x @ mx + (x * hx) @ mxe
+    return x
+
+
+def ideal_flow(A, Bh, rc, uc, pc, hc, prc, puc, Vc, Vtc, p_pl, h_pl, omega, relax, gamma):
+    """The flow x (kg/s) into a slot held at its plenum's pressure p_pl by an ideal port,
+    and the enthalpy it carries (arrays or scalars, :func:`.flows.select`): A the other
+    mass flows in (kg/s), Bh the other enthalpy flows and heat (W).
+
+    The flow makes dp/dt = (p_pl - p) omega / relax (the drift correction): with
+    dm/dt = A + x and dU/dt = Bh + x h_x - p dV/dt, dp/dt = pr drho/dt + pu du/dt."""
     tgt = (p_pl - pc) * (omega / relax)
-    Vc, Vtc = V[..., c], Vt[..., c]
     if gamma > 0.0:
         g1 = gamma - 1.0
         num = Vc * tgt / g1 - Bh + rc * hc * Vtc
-        x = num / np.where(num > 0.0, h_pl + 0.0 * hc, hc)
+        x = num / flows.select(num > 0.0, h_pl + 0.0 * hc, hc)
     else:
-        prc, puc = pr[:, c], pu[:, c]
         num = Vc * tgt - prc * (A - rc * Vtc) - puc * (Bh - pc * Vtc - uc * A) / rc
         x_in = num / (prc + puc * (h_pl - uc) / rc)
         x_out = num / (prc + puc * (hc - uc) / rc)
-        x = np.where(x_in > 0.0, x_in, np.minimum(x_out, 0.0))
-    hx = np.where(x > 0.0, h_pl + 0.0 * hc, hc)
-    dy += x @ mx + (x * hx) @ mxe
-    return x
+        x = flows.select(x_in > 0.0, x_in, np.minimum(x_out, 0.0))
+    return x, flows.select(x > 0.0, h_pl + 0.0 * hc, hc)
 
 
 def fusable(model, seg) -> bool:
@@ -124,57 +135,122 @@ def fusable(model, seg) -> bool:
             and hasattr(model.fluid, "kernel_params"))
 
 
+def scatter(m):
+    """The rows of a map (rows, cols) as sparse rows for the compiled loops: row i's
+    non-zero columns col[ptr[i]:ptr[i + 1]] and their weights w (a flow touches two
+    nodes: its rows of mm and me hold two entries of the state's ~25, of mg one)."""
+    rows, col = np.nonzero(m)
+    ptr = np.searchsorted(rows, np.arange(m.shape[0] + 1))
+    return ptr.astype(np.intp), col.astype(np.intp), np.ascontiguousarray(m[rows, col])
+
+
+def _add(dy, b, sparse, i, v):
+    """dy[b] += v times row i of the map ``sparse`` (:func:`scatter`)."""
+    ptr, col, w = sparse
+    for q in range(ptr[i], ptr[i + 1]):
+        dy[b, col[q]] += w[q] * v
+
+
+# Rows of rhs_fused's node values (suction plenum, the slots, the discharge plenum):
+# the state, the nozzle constants of its kappa (critical ratio, 2k / (k - 1), 1 / k) and
+# sqrt(p rho), the slots' T and pressure derivatives.
+_P, _R, _H, _U, _XC, _CC, _IK, _S, _T, _PR, _PU = range(11)
+
+
+def _node(W, j, p, rho, h, kap):
+    W[_P, j], W[_R, j], W[_H, j], W[_S, j] = p, rho, h, np.sqrt(p * rho)
+    xc, cc, ik = flows.nozzle_constants(kap)
+    W[_XC, j], W[_CC, j], W[_IK, j] = xc, cc, ik
+
+
 def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, ib,
-              fanno, zeta, x_choke, mm, me, mg, acc_w, acc_q, c, p_pl, h_pl, mx, mxe, plen,
+              fanno, zeta, x_choke, maps, acc_w, acc_q, c, p_pl, h_pl, ideal_maps, plen,
               kind, par, tab, gamma):
     """dy/dtheta of a fusable segment (see :meth:`.model.ChamberModel.rhs`): y (B, S);
     the geometry of the active slots at the angle (V, 1/V, dV/dtheta, dV/dt, the flows'
     areas, heat transfer coefficient times area or an empty array); the flows' nodes and
-    laws (Fanno where ``fanno``); the maps; the ideal ports (slots c); the plenums' p,
-    rho, h, kappa (plen (4, 2)); the fluid (kind, par, tab; gamma > 0 a perfect gas)."""
-    m = y[:, :na]
-    rho = m * iV
-    u = y[:, n:n + na] / m
-    p, T, kap, pr, pu = fluid_state(kind, par, tab, rho, u)
-    h = u * gamma if gamma > 0.0 else u + p / rho
-    P = nodes(p, plen[0, 0], plen[0, 1])
-    R = nodes(rho, plen[1, 0], plen[1, 1])
-    H = nodes(h, plen[2, 0], plen[2, 1])
-    xc, cc, ik = flows.nozzle_constants(nodes(kap, plen[3, 0], plen[3, 1]))
-    # only the flows of non-zero area (about half: lines that do not exist at the angle)
-    live = np.nonzero(area > 0.0)[0]
-    a, b = ia[live], ib[live]
-    fwd, x, p1, r1 = upstream(P, R, a, b)
-    f = flows.nozzle_f_c(x, np.where(fwd, xc[:, a], xc[:, b]), np.where(fwd, cc[:, a], cc[:, b]),
-                         np.where(fwd, ik[:, a], ik[:, b]))
-    fl = fanno[live]
-    if fl.any():
-        f = np.where(fl, flows.fanno_f(x, zeta[live], x_choke[live]), f)
-    F = np.zeros((y.shape[0], ia.size))
-    E = np.zeros((y.shape[0], ia.size))
-    F[:, live] = mass_flows(fwd, p1, r1, f, area[live])
-    E[:, live] = enthalpy_flows(F[:, live], H[:, a], H[:, b])
-    dy, pdV = balances(F, E, mm, me, mg, p, dV, n, acc_w)
-    if wall.size:
-        q = wall * (T_wall - T)
-        dy[:, acc_q] = q.sum(axis=1) * w
-        dy[:, n:n + na] += q * w
-    if c.size:
-        ideal_ports(dy, pdV, V, Vt, rho, u, p, h, pr, pu, c, p_pl, h_pl, mx, mxe, omega,
-                    relax, n, gamma)
+    laws (Fanno where ``fanno``); the flows' and the ideal ports' maps into dy
+    (:func:`scatter` of mm, me, mg and of mx, mxe); the ideal ports (slots c); the
+    plenums' p, rho, h, kappa (plen (4, 2)); the fluid (kind, par, tab; gamma > 0 a
+    perfect gas).
+
+    Loops over the batch, the slots and the flows, calling the physics one element at a
+    time (:func:`fluid_state`, :func:`.flows.nozzle_f_c`, :func:`.flows.fanno_f`,
+    :func:`ideal_flow`): compiled, no temporaries; each flow adds to the few entries of
+    dy its maps name instead of dense products with them.  What depends on one node
+    only (sqrt(p rho), the nozzle's constants) is evaluated per node, not per flow."""
+    B = y.shape[0]
+    dy = np.zeros(y.shape)
+    W = np.empty((11, na + 2))  # node values of one batch member
+    _node(W, 0, plen[0, 0], plen[1, 0], plen[2, 0], plen[3, 0])
+    _node(W, na + 1, plen[0, 1], plen[1, 1], plen[2, 1], plen[3, 1])
+    x_id = np.empty(c.size)
+    h_id = np.empty(c.size)
+    for b in range(B):
+        for k in range(na):
+            m = y[b, k]
+            rho = m * iV[k]
+            u = y[b, n + k] / m
+            p, T, kap, pr, pu = fluid_state(kind, par, tab, rho, u)
+            _node(W, k + 1, p, rho, u * gamma if gamma > 0.0 else u + p / rho, kap)
+            W[_U, k + 1], W[_T, k + 1], W[_PR, k + 1], W[_PU, k + 1] = u, T, pr, pu
+        for f in range(ia.size):
+            if not area[f] > 0.0:  # a line that does not exist at this angle
+                continue
+            a, d = ia[f], ib[f]
+            fwd = W[_P, a] >= W[_P, d]
+            up, dn = (a, d) if fwd else (d, a)
+            x = W[_P, dn] / W[_P, up]
+            if fanno[f]:
+                fx = flows.fanno_f(x, zeta[f], x_choke[f])
+            else:
+                fx = flows.nozzle_f_c(x, W[_XC, up], W[_CC, up], W[_IK, up])
+            F = W[_S, up] * fx * area[f]
+            F = F if fwd else -F
+            _add(dy, b, maps[0], f, F)
+            _add(dy, b, maps[1], f, F * (W[_H, a] if F > 0.0 else W[_H, d]))
+            _add(dy, b, maps[2], f, abs(F))
+        work = 0.0
+        for k in range(na):
+            pdv = W[_P, k + 1] * dV[k]
+            dy[b, n + k] -= pdv
+            work += pdv
+        dy[b, acc_w] = -work
+        if wall.size:
+            heat = 0.0
+            for k in range(na):
+                q = wall[k] * (T_wall - W[_T, k + 1])
+                dy[b, n + k] += q * w
+                heat += q
+            dy[b, acc_q] = heat * w
+        for i in range(c.size):
+            k = c[i]
+            x_id[i], h_id[i] = ideal_flow(
+                dy[b, k] * omega, (dy[b, n + k] + W[_P, k + 1] * dV[k]) * omega,
+                W[_R, k + 1], W[_U, k + 1], W[_P, k + 1], W[_H, k + 1], W[_PR, k + 1],
+                W[_PU, k + 1], V[k], Vt[k], p_pl[i], h_pl[i], omega, relax, gamma)
+        for i in range(c.size):
+            _add(dy, b, ideal_maps[0], i, x_id[i])
+            _add(dy, b, ideal_maps[1], i, x_id[i] * h_id[i])
     return dy
 
 
 # -- one segment in one compiled call (issue 19) ---------------------------------------
-# args = (tableau (c, A, b, e), geometry (ChamberModel.fused_geometry), the arguments of
-# rhs_fused after its geometry (ChamberModel._fused_args)).
+# args = (the step's own: the tableau (c, A, b, e) or ros23's (atol, Jacobian columns),
+# geometry (ChamberModel.fused_geometry), the arguments of rhs_fused after its geometry
+# (ChamberModel._fused_args)).
 
 def rhs_segment(theta, y, args):
     """:func:`rhs_fused` at angle ``theta`` with the segment's geometry evaluated here:
     what :meth:`.model.ChamberModel.rhs` computes for a fusable segment."""
-    nodes_, coef, kP, area_m, heat, omega, n, na, T_wall, w, relax = args[1]
+    nodes_, coef, kP, area_map, heat, omega, n, na, T_wall, w, relax = args[1]
     V, dV, lin = spline_at(nodes_, coef, theta + kP)
-    area = area_m @ lin.reshape(lin.size)
+    flat = lin.reshape(lin.size)
+    ptr, col, wts = area_map  # (:func:`scatter` of the segment's area matrix)
+    area = np.zeros(ptr.size - 1)
+    for f in range(area.size):
+        for q in range(ptr[f], ptr[f + 1]):
+            area[f] += wts[q] * flat[col[q]]
     wall = heat * V ** (2.0 / 3.0) if heat > 0.0 else np.empty(0)
     return rhs_fused(y, n, na, V, 1.0 / V, dV, omega * dV, area, wall, T_wall, w, omega,
                      relax, *args[2])
@@ -188,3 +264,13 @@ def rk_step_fused(t, y, h, k1, args):
 def segment_fused(args, t, t_end, ends, y, k1, h, rtol, atol, order, budget, slack, record):
     return stepping.segment(rk_step_fused, args, t, t_end, ends, y, k1, h, rtol, atol, order,
                             budget, slack, record)
+
+
+def ros23_step_fused(t, y, h, k1, args):
+    atol, cols = args[0]  # (the step's own atol: the Jacobian's steps)
+    return stepping.ros23_step(rhs_segment, args, t, y, h, k1, atol, cols)
+
+
+def segment_ros23(args, t, t_end, ends, y, k1, h, rtol, atol, order, budget, slack, record):
+    return stepping.segment(ros23_step_fused, args, t, t_end, ends, y, k1, h, rtol, atol,
+                            order, budget, slack, record)

@@ -327,9 +327,11 @@ class ChamberModel:
                 s, d = self.suc, self.dis
                 plen = np.array([[s.p, d.p], [s.rho, d.rho], [s.h, d.h], [s.kappa, d.kappa]])
                 acc0 = self.nv * self.n
-                args = (seg.ia, seg.ib, fanno, zeta, x_choke, seg.mm, seg.me, seg.mg,
+                args = (seg.ia, seg.ib, fanno, zeta, x_choke,
+                        tuple(kernel.scatter(m) for m in (seg.mm, seg.me, seg.mg)),
                         acc0 + ACC_W, acc0 + ACC_Q, seg.ideal, seg.ideal_p, seg.ideal_h,
-                        seg.mx, seg.mxe, plen, *self.fluid.kernel_params(),
+                        (kernel.scatter(seg.mx), kernel.scatter(seg.mxe)), plen,
+                        *self.fluid.kernel_params(),
                         self.fluid.gamma if self.ideal_gas else 0.0)
             self.fast[key] = args
         return self.fast[key]
@@ -343,7 +345,7 @@ class ChamberModel:
         if key not in self.fast:
             heat = self.op.heat_transfer_W_m2K * WALL_AREA_FACTOR
             self.fast[key] = (self.geo.nodes, self.geo.coef, seg.kP,
-                              np.ascontiguousarray(seg.area), heat, self.geo.omega_outer,
+                              kernel.scatter(seg.area), heat, self.geo.omega_outer,
                               self.n, seg.n_act, self.op.wall_temperature_K,
                               self.inv_omega, IDEAL_PORT_RELAXATION_RAD)
         return self.fast[key]

@@ -284,42 +284,37 @@ def _topology(fr: _Frame, span, na, k_sc, k_do, links) -> Segment:
         else None)
 
 
-def _node_map(fr: _Frame, na, node_a, node_b):
-    """Rows of dy for a unit mass flow and for a unit enthalpy flow from node_a to node_b."""
-    S, acc0, n, w = fr.n_state, fr.nv * fr.n, fr.n, fr.w
-    rm = np.zeros(S)
-    re = np.zeros(S)
-    for node, sgn in ((node_a, -1.0), (node_b, 1.0)):
-        if node == 0:
-            rm[acc0 + ACC_M_SUC] -= sgn * w
-            re[acc0 + ACC_H_SUC] -= sgn * w
-        elif node == na + 1:
-            rm[acc0 + ACC_M_DIS] += sgn * w
-            re[acc0 + ACC_H_DIS] += sgn * w
-        else:
-            rm[node - 1] += sgn * w
-            re[n + node - 1] += sgn * w
+def _node_maps(fr: _Frame, na, node_a, node_b):
+    """Rows of dy for a unit mass flow and for a unit enthalpy flow from node_a to node_b
+    (arrays of nodes: one row each)."""
+    acc0, n, w = fr.nv * fr.n, fr.n, fr.w
+    nf = len(node_a)
+    rm, re = np.zeros((nf, fr.n_state)), np.zeros((nf, fr.n_state))
+    rows = np.arange(nf)
+    for nodes, sgn in ((np.asarray(node_a, dtype=np.intp), -1.0),
+                       (np.asarray(node_b, dtype=np.intp), 1.0)):
+        suc, dis = nodes == 0, nodes == na + 1
+        col_m = np.where(suc, acc0 + ACC_M_SUC, np.where(dis, acc0 + ACC_M_DIS, nodes - 1))
+        col_e = np.where(suc, acc0 + ACC_H_SUC, np.where(dis, acc0 + ACC_H_DIS, n + nodes - 1))
+        wgt = np.where(suc, -sgn * w, sgn * w)  # the suction's sums count what leaves it
+        np.add.at(rm, (rows, col_m), wgt)
+        np.add.at(re, (rows, col_e), wgt)
     return rm, re
 
 
 def _flow_maps(fr: _Frame, na, ia, ib, leak_laws):
     """mm, me, mg of Segment: mass, enthalpy and |mass| flows into dy/dtheta."""
-    nf, acc0 = len(ia), fr.nv * fr.n
-    mm, me, mg = (np.zeros((nf, fr.n_state)) for _ in range(3))
-    for f in range(nf):
-        mm[f], me[f] = _node_map(fr, na, ia[f], ib[f])
-        if f < len(leak_laws):  # gross leakage, per report key
-            mg[f, acc0 + fr.acc.leak(leak_laws[f].path.report_key)] = fr.w
+    mm, me = _node_maps(fr, na, ia, ib)
+    mg = np.zeros_like(mm)
+    for f, law in enumerate(leak_laws):  # gross leakage, per report key
+        mg[f, fr.nv * fr.n + fr.acc.leak(law.path.report_key)] = fr.w
     return mm, me, mg
 
 
 def _ideal_maps(fr: _Frame, na, ideal, is_dis):
     """mx, mxe of Segment: the ideal ports' mass and enthalpy flows into dy/dtheta."""
-    mx, mxe = np.zeros((len(ideal), fr.n_state)), np.zeros((len(ideal), fr.n_state))
-    for i, k in enumerate(ideal):
-        plen = na + 1 if is_dis[i] else 0
-        mx[i], mxe[i] = _node_map(fr, na, plen, k + 1)
-    return mx, mxe
+    plen = np.where(is_dis, na + 1, 0).astype(np.intp)
+    return _node_maps(fr, na, plen, np.asarray(ideal, dtype=np.intp) + 1)
 
 
 def _groups(links, laws) -> tuple[FlowGroup, ...]:

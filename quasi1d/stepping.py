@@ -12,6 +12,8 @@ step sequence for the whole batch.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 # Status of a segment's integration
@@ -51,6 +53,82 @@ def rk_step(rhs, args, c, A, b, e, t, y, h, k1):
             y_new = yi
         K[i] = np.ascontiguousarray(rhs(ti, yi.reshape(B, S), args)).reshape(B * S)
     return y_new.reshape(B, S), K[s].reshape(B, S).copy(), (h * (e @ K)).reshape(B, S)
+
+
+# Rosenbrock method of Shampine & Reichelt (MATLAB ode23s): L-stable, order 2 with a
+# third-order error estimate, three right-hand sides and one Jacobian per step.
+_D = 1.0 / (2.0 + math.sqrt(2.0))
+_E32 = 6.0 + math.sqrt(2.0)
+# finite-difference steps of the Jacobian (relative to the tolerance scale) and of df/dt
+JAC_STEP = 1.0e-7
+JAC_T_STEP = 1.0e-7
+
+
+def ros23_step(rhs, args, t, y, h, F0, atol, cols):
+    """One Rosenbrock step from (t, y) with f(t, y) = F0: (y_new, f(t + h, y_new), error
+    estimate), an infinite error where a stage is not finite.  The formula is a W-method,
+    so a Jacobian could serve several steps, but measured on nozzle-port cycles a stale
+    one cost more steps and cycles than it saved: a fresh one every step.
+
+    df/dy is non-zero in the columns ``cols`` only (the chamber states of the active
+    slots; nothing depends on the accumulators or on idle slots), so W = I - h d J is
+    inverted in that (nc, nc) block only: W k = R gives (I - h d J_cc) k_c = R_c and then
+    k = R + h d J[:, c] k_c (rows c included)."""
+    fail = (y, F0, np.full_like(y, np.inf))
+    Jc, T = jacobian(rhs, args, t, y, F0, atol, cols)
+    if not (np.all(np.isfinite(Jc)) and np.all(np.isfinite(T)) and np.all(np.isfinite(F0))):
+        return fail
+    hd = h * _D
+    Wi = w_inverse(Jc, cols, hd)
+    if not np.all(np.isfinite(Wi)):
+        return fail
+    hdT = hd * T
+    k1 = _w_solve(Wi, Jc, cols, hd, F0 + hdT)
+    F1 = rhs(t + 0.5 * h, y + 0.5 * h * k1, args)
+    if not np.all(np.isfinite(F1)):
+        return fail
+    k2 = _w_solve(Wi, Jc, cols, hd, F1 - k1) + k1
+    y_new = y + h * k2
+    F2 = rhs(t + h, y_new, args)
+    if not np.all(np.isfinite(F2)):
+        return fail
+    k3 = _w_solve(Wi, Jc, cols, hd, F2 - _E32 * (k2 - F1) - 2.0 * (k1 - F0) + hdT)
+    return y_new, F2, (h / 6.0) * (k1 - 2.0 * k2 + k3)
+
+
+def jacobian(rhs, args, t, y, f0, atol, cols):
+    """The columns ``cols`` of df/dy (B, S, nc) and df/dt (B, S) of every batch member by
+    finite differences, in two batched calls.  Each member gets its own Jacobian, so that
+    a batch of perturbed states (the cycle solver's finite-difference Jacobian of the
+    period map) sees the same method as an unperturbed one."""
+    B, S = y.shape
+    nc = cols.size
+    delta = JAC_STEP * (np.abs(y[:, cols]) + atol[cols])  # (B, nc)
+    Y = np.empty((B, nc, S))
+    for j in range(nc):
+        Y[:, j, :] = y
+        Y[:, j, cols[j]] += delta[:, j]
+    F = rhs(t, Y.reshape(B * nc, S), args).reshape(B, nc, S)
+    ft = rhs(t + JAC_T_STEP, y, args)
+    return np.transpose((F - f0[:, None, :]) / delta[:, :, None], (0, 2, 1)), \
+        (ft - f0) / JAC_T_STEP
+
+
+def _w_solve(Wi, Jc, cols, hd, R):
+    return R + hd * batch_mv(Jc, batch_mv(Wi, R[:, cols]))
+
+
+def batch_mv(A, x):
+    """A[b] @ x[b] for every b (compiled: loops, :mod:`.compiled`)."""
+    return np.einsum("bij,bj->bi", A, x)
+
+
+def w_inverse(Jc, cols, hd):
+    """(I - hd J_cc)^-1 of every batch member, NaN where singular (compiled: loops)."""
+    try:
+        return np.linalg.inv(np.eye(cols.size) - hd * Jc[:, cols, :])
+    except np.linalg.LinAlgError:
+        return np.full((Jc.shape[0], cols.size, cols.size), np.nan)
 
 
 def segment(step, args, t, t_end, replay, y, k1, h, rtol, atol, order, budget, slack,

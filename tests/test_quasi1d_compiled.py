@@ -104,11 +104,16 @@ def test_compiled_rhs_equals_numpy(table, compiled_on, name):
     assert checked >= 4
 
 
-def test_compiled_segment_equals_python_steps(table, compiled_on):
-    """A whole segment in one compiled call (quasi1d.stepping through kernel.segment_fused)
-    against the same loop run as Python around the model's numpy right-hand side: the
-    same steps chosen, the same end state to round-off, and a replay of those steps."""
-    op, leak, ports = CASES["dry air, ideal ports, nozzle leakage"]
+@pytest.mark.parametrize("method, name", [
+    ("dopri5", "dry air, ideal ports, nozzle leakage"),
+    ("ros23", "perfect gas, nozzle ports, Fanno leakage, heat transfer"),
+    ("ros23", "dry air, ideal ports, nozzle leakage")])
+def test_compiled_segment_equals_python_steps(table, compiled_on, method, name):
+    """A whole segment in one compiled call (quasi1d.stepping through kernel.segment_fused,
+    or kernel.segment_ros23) against the same loop run as Python around the model's numpy
+    right-hand side: the same steps chosen, the same end state to round-off, and a
+    replay of those steps."""
+    op, leak, ports = CASES[name]
     model = build_model(table, op, leak, ports)
     seg = max((s for s in model.segments if kernel.fusable(model, s)),
               key=lambda s: s.end - s.start)
@@ -117,19 +122,32 @@ def test_compiled_segment_equals_python_steps(table, compiled_on):
     V = model.geo.volume(seg.start + seg.kP)
     y[:, 0], y[:, model.n] = model.suc.rho * V[0], model.suc.rho * V[0] * model.suc.u
     atol = 1e-6 * model.atol_scales()
-    tab = integrate.DOPRI5
     model.fast["kernel"] = None
     k1 = model.rhs(seg.start, y, seg)
 
-    def py_step(t, yy, h, kk, _):
-        return stepping.rk_step(lambda tt, y3, _a: model.rhs(tt, y3, seg), None, tab.c, tab.A,
-                                tab.b, tab.e, t, yy, h, kk)
+    def rhs(tt, y3, _a):
+        return model.rhs(tt, y3, seg)
 
-    args = ((tab.c, tab.A, tab.b, tab.e), model.fused_geometry(seg), model._fused_args(seg))
-    common = (seg.start, seg.end, np.empty(0), y, k1, np.nan, 1e-6, atol, tab.order, 10_000,
+    geo = model.fused_geometry(seg)
+    if method == "ros23":
+        cols = model.state_columns(seg)
+        order, entry, args = 3, compiled_on.segment_ros23, ((atol, cols), geo,
+                                                             model._fused_args(seg))
+
+        def py_step(t, yy, h, kk, _):
+            return stepping.ros23_step(rhs, None, t, yy, h, kk, atol, cols)
+    else:
+        tab = integrate.DOPRI5
+        order, entry, args = tab.order, compiled_on.segment, ((tab.c, tab.A, tab.b, tab.e),
+                                                              geo, model._fused_args(seg))
+
+        def py_step(t, yy, h, kk, _):
+            return stepping.rk_step(rhs, None, tab.c, tab.A, tab.b, tab.e, t, yy, h, kk)
+
+    common = (seg.start, seg.end, np.empty(0), y, k1, np.nan, 1e-6, atol, order, 10_000,
               0.0, True)
     ref = stepping.segment(py_step, None, *common)
-    got = compiled_on.segment(args, *common)
+    got = entry(args, *common)
     assert ref[0] == got[0] == stepping.DONE
     # the same steps: round-off in the error estimates (RHS_RTOL of them) moves each step
     # size, and so each later step end, by far less than STEP_RTOL
@@ -137,8 +155,8 @@ def test_compiled_segment_equals_python_steps(table, compiled_on):
     assert np.allclose(got[4], ref[4], rtol=STEP_RTOL, atol=0.0)
     scale = np.max(np.abs(ref[2]), axis=0) + atol
     assert np.max(np.abs(got[2] - ref[2]) / scale) < STEP_RTOL
-    again = compiled_on.segment(args, seg.start, seg.end, got[4], y, k1, np.nan, 1e-6, atol,
-                                tab.order, 0, 4.0, False)
+    again = entry(args, seg.start, seg.end, got[4], y, k1, np.nan, 1e-6, atol, order, 0, 4.0,
+                  False)
     assert again[0] == stepping.DONE and np.array_equal(again[2], got[2])
 
 

@@ -28,7 +28,7 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[dev]'
 	@touch $@
 
-# numba's cache of the compiled right-hand side and segment loop (~2 min CPU once, kept
+# numba's cache of the compiled right-hand side and segment loop (~80 s CPU once, kept
 # in ~/.cache under a hash of the sources; without it the model runs in numpy)
 $(NUMBA_STAMP): $(STAMP) $(wildcard quasi1d/*.py)
 	$(PY) -m rotorflow.quasi1d.compiled
@@ -59,7 +59,7 @@ export: $(STAMP) ## solids and machining files of a case: make export CASE=... (
 
 test: $(STAMP) openfoam ## set up, then run the tests (all tiers but slow)
 	@# numba's cache is filled on the second core while pytest runs on the first (a
-	@# fresh clone would otherwise wait ~2 min for it); tests that need it before it is
+	@# fresh clone would otherwise wait ~80 s for it); tests that need it before it is
 	@# ready compile it themselves, the others run in numpy until it is there
 	$(MAKE) --no-print-directory $(NUMBA_STAMP) > $(VENV)/numba-cache.log 2>&1 &
 	$(PY) -m pytest -m "not slow" --durations=20 $(PYTEST_ARGS)

@@ -31,9 +31,11 @@ from rotorflow.workflow.case import load_case
 
 REPO = Path(__file__).resolve().parents[1]
 RESOLUTIONS = (24, 48, 96, 192)
-#: The reference's points per period.  Pi_max of the pin-cycloid converges at about first
-#: order (its section loads jump where a tip passes a cusp, between table nodes): 192
-#: left it 1.2e-4 from its limit, 768 is within 2e-6 of 1536 (circular 5e-6).
+#: The reference's points per period.  The section loads jump between table nodes where a
+#: tip passes a cusp and are swept at fourth order between those events (geometry/
+#: load_sweep.py): Pi_max at 24 to 192 lies within 2.5e-5 of 768, and 768 within 4e-7 of
+#: 1536 (circular 1e-8).  (As the loads' linear interpolant it converged at first order:
+#: 192 left it 1.2e-4 from its limit.)
 REFERENCE = 768
 #: Port samples per period of the reference's ports (the table's: ports.STEP_PER_PERIOD).
 REFERENCE_PORT_STEPS = 384

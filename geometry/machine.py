@@ -10,7 +10,11 @@ do not: the section forces and torques have square-root kinks where fillet conta
 appear and vanish in pairs (:mod:`.split_space`), which Gauss nodes along z resolve
 slowly (48 panels left Pi_max 1.2 % off).  They are tabulated ``section_refinement``
 times finer than the chamber curves and integrated along z exactly for their linear
-interpolant (:meth:`.Sweep.hat_kernel`), a convolution on the section grid.
+interpolant (:meth:`.Sweep.hat_kernel`), a convolution on the section grid; or, where
+the family says at which angles they jump (:class:`.load_sweep.LoadEvents`: the twin
+screw's, where its sealing changes hands between nodes), at fourth order between those
+angles (:mod:`.load_sweep`: Pi_max of seed 004's 4/6 pairs within 3e-5 at 24 points per
+period, against 9e-4 as the linear interpolant).
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ import numpy as np
 
 from .family import RotorPair
 from .lines import line_lengths, stretches
+from .load_sweep import sweep_loads
 from .scalar import minimum
 from .section import POINTS_PER_PERIOD, SectionChamber
 from .spline import CubicSpline
@@ -167,25 +172,32 @@ class SweptMachine:
 
     @cached_property
     def loads(self) -> ChamberLoads:
-        """Volume and loads on the section grid, integrated along z by convolution."""
+        """Volume and loads on the section grid, integrated along z by convolution:
+        the loads at fourth order between the events where they jump where the family
+        gives them (:mod:`.load_sweep`), else as their linear interpolant."""
         sec = self.section
-        k1 = self.sweep.hat_kernel(sec.psi[1] - sec.psi[0], 1)
-        k2 = self.sweep.hat_kernel(sec.psi[1] - sec.psi[0], 2)
-
-        def sweep(values, kernel):
-            return _convolve(values, kernel)
-
-        volume = np.maximum(sweep(sec.area, k2), 0.0)
         step = sec.psi[1] - sec.psi[0]
-        rotors = range(sec.torque.shape[1])
-        return ChamberLoads(
-            phi=sec.psi[0] + step * np.arange(len(volume)),
-            volume=volume,
-            force=np.stack([np.stack([sweep(sec.force[:, r, c], k1) for c in (0, 1)], -1)
-                            for r in rotors], 1),
-            torque=np.stack([sweep(sec.torque[:, r], k2) for r in rotors], 1),
-            step=step,
-        )
+        k2 = self.sweep.hat_kernel(step, 2)
+        volume = np.maximum(_convolve(sec.area, k2), 0.0)
+        n = len(volume)
+        ev = sec.load_events
+        if ev is not None:
+            # forces weigh scale(z) (a section's edge), torques scale(z)^2 (its moment)
+            nf, nt = sec.force[0].size, sec.torque.shape[1]
+            both = np.concatenate([sec.force.reshape(len(sec.psi), nf), sec.torque], 1)
+            extra = np.concatenate([ev.sample_force.reshape(len(ev.sample_psi), nf),
+                                    ev.sample_torque], 1)
+            out = sweep_loads(sec.psi, both, self.sweep, [1] * nf + [2] * nt, n, ev, extra)
+            force = out[:, :nf].reshape((n,) + sec.force.shape[1:])
+            torque = out[:, nf:]
+        else:
+            k1 = self.sweep.hat_kernel(step, 1)
+            rotors = range(sec.torque.shape[1])
+            force = np.stack([np.stack([_convolve(sec.force[:, r, c], k1) for c in (0, 1)],
+                                       -1) for r in rotors], 1)
+            torque = np.stack([_convolve(sec.torque[:, r], k2) for r in rotors], 1)
+        return ChamberLoads(phi=sec.psi[0] + step * np.arange(n), volume=volume,
+                            force=force, torque=torque, step=step)
 
     @property
     def period(self) -> float:

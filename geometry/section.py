@@ -117,6 +117,9 @@ class SectionChamber:
     tracks: tuple = ()
     #: Openings across cuts of the section (:class:`Opening`).
     openings: tuple = ()
+    #: Where the loads jump (:class:`.load_sweep.LoadEvents`): given, the loads are swept
+    #: at fourth order between them; None, as their linear interpolant.
+    load_events: object = None
 
     def contact_rate(self, which: str | Track) -> np.ndarray:
         """d(contact point)/d(psi) of the leading or trailing contact, on the grid.

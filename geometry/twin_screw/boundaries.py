@@ -28,9 +28,16 @@ SAME_VERTEX = 1e-9
 #: a little away from where the lens's Boolean put its end.
 LENS_MATCH = 2e-3
 
-#: A cut at the cusp this near a tip (per C) ends at the tip: a rounded tip nearly as
-#: curved as its bore overlaps it over a lens of up to ~0.2 mm at C = 78 mm.
-TIP_MATCH = 5e-3
+#: A cut at the cusp this near a tip (per C) ends at the tip: where the grown rotor
+#: overlaps its bore, the part on one side ends its arc at the bore (the tip) and the
+#: other at the cusp line.  A rounded tip's lens (up to ~0.2 mm at C = 78 mm) is
+#: TIP_BAND's; this takes a cut end that is the tip up to 8 um at C = 80 mm.  It was
+#: 5e-3 (0.4 mm): then a cut end that far from a tip moved to it, and the rotor's arc
+#: between them to the part across the cusp line, a jump in both parts' loads 0.008
+#: rad (male) or 0.012 rad (female) off the tip's passage (seed 004's 4/6 pairs).
+TIP_MATCH = 1e-4
+#: The same for a land's corner or the cusp point it passes (:meth:`Boundaries._snap_land`).
+LAND_MATCH = 5e-3
 
 #: A rotor within this (per C) of its bore over an arc about its tip seals along the whole
 #: arc: a cut at the cusp that ends on it ends at the tip.  Four times the rotors' growth
@@ -251,7 +258,7 @@ class Boundaries:
         dc = np.linalg.norm(cusps - x, axis=-1)
         i = int(np.argmin(dc))
         if neighbour == CUSP:
-            if min(d[j], dc[i]) > TIP_MATCH * self.C:
+            if min(d[j], dc[i]) > LAND_MATCH * self.C:
                 return x
             return cusps[i] if dc[i] < d[j] else corners[j]
         end = cusps[i] if dc[i] < d[j] else corners[j]

@@ -24,7 +24,6 @@ chamber beyond is older ("interlobe-lead"), in the dying part younger ("-trail")
 
 from __future__ import annotations
 
-import math
 from collections import defaultdict
 
 import numpy as np
@@ -34,6 +33,7 @@ from rotorflow.errors import CaseError
 from ..planar import TWO_PI
 from ..section import POINTS_PER_PERIOD, SectionChamber, Track
 from .blowhole import build_openings, openings_of
+from .load_events import load_events
 from .regions import FEMALE, MALE
 from .track_ends import refine
 
@@ -49,9 +49,6 @@ CUT_MEMO = 512
 #: A track point that moves more than this many times its median step between two
 #: nodes has jumped to another contact (a new identity, no rate across it).
 JUMP_FACTOR = 8.0
-#: A band's instant within this (rad) of a node is on it: the grid's angles carry the
-#: tip angle's polishing error (~1e-8); a jump that far off a node weighs nothing.
-JUMP_NODE = 1e-6
 #: Absent nodes inside a track filled by its cubic (:func:`_holes`): one or two were
 #: seen near the cusps on the pin-cycloid.
 HOLE_NODES = 3
@@ -242,12 +239,12 @@ def _assemble(pair, psi0, ppp, nodes) -> SectionChamber:
     torque = np.array([nodes[k]["torque"] if k in nodes else np.zeros(2) for k in idx])
     perim = np.array([nodes[k]["perimeter"] if k in nodes else np.zeros(2) for k in idx])
     psi = psi0 + h * idx
-    force, torque = _jumps(pair, psi, force), _jumps(pair, psi, torque)
     tracks = [refine(pair, psi, t) for t in
               _tracks([nodes[k]["seals"] if k in nodes else [] for k in idx], n, h)]
     tracks = tuple(t for t in tracks if t.present.any())
     openings = build_openings(pair, psi, [nodes[k]["openings"] if k in nodes else []
                                           for k in idx], tracks)
+    events = load_events(pair, psi, tracks, lambda phase: _loads_at(pair, phase))
     zero2 = np.zeros((n, 2))
     zeros = np.zeros(n, dtype=int)
     return SectionChamber(
@@ -256,51 +253,24 @@ def _assemble(pair, psi0, ppp, nodes) -> SectionChamber:
         speed_ratio=tuple(r.speed_ratio for r in pair.rotors),
         lead_offset=zeros, trail_offset=zeros, lead_id=zeros, trail_id=zeros,
         lead_kind=np.full(n, "interlobe"), trail_kind=np.full(n, "interlobe"),
-        tracks=tracks, openings=openings,
+        tracks=tracks, openings=openings, load_events=events,
     )
 
 
-def _jumps(pair, psi, loads):
-    """Loads at a band's instant on a node: the mean of their limits either side.
-
-    At a band (the pin-cycloid's pin arcs coincide as the pin's centre passes the
-    pitch point) the section's contact jumps from one end of the band to the other, and
-    with it the wetted arcs' ends: the loads jump.  The section exactly at that instant
-    shows one side or neither.  The loads are integrated along the rotors as their
-    linear interpolant (:meth:`.SweptMachine.loads`), which spreads a jump over a cell,
-    an error of the first order in the step; with the node at the mean of the limits
-    (each side extrapolated linearly from its two nearest nodes, zero where the chamber
-    is not there) the interpolant's integral errs by O(h^2), as the trapezoid rule's
-    does across a jump at a node."""
-    out = loads.copy()
+def _loads_at(pair, phase: float):
+    """(residue, {q: (force, torque)}): the section cut at ``phase``'s residue in the
+    period from -beta_0, its parts' loads summed per chamber q (chamber 0 at residue +
+    q period: :func:`section_chamber`'s booking)."""
     period = TWO_PI / pair.gearing.lobes_male
-    n = len(psi)
-    h = psi[1] - psi[0]
-    for phase, length, _, shadow in pair.contact_breaks:
-        if length <= 0.0:
-            continue
-        k0 = math.ceil((psi[0] - phase) / period - 0.5)
-        for k in range(k0, math.floor((psi[-1] - phase) / period + 0.5) + 1):
-            j = int(round((phase + k * period - psi[0]) / h))
-            if not 0 <= j < n or abs(psi[j] - phase - k * period) > JUMP_NODE:
-                continue
-            # Nodes in the band's shadow (:mod:`.track_ends`) hold no true contact:
-            # each side is extrapolated from its two nearest nodes outside it.
-            m = int(shadow / h)
-            a, b = j - m - 1, j + m + 1
-            for i in range(max(a + 1, 0), min(b, n)):
-                left = _extrapolate(loads, a, a - 1, i)
-                right = _extrapolate(loads, b, b + 1, i)
-                out[i] = left if i < j else (right if i > j else 0.5 * (left + right))
-    return out
-
-
-def _extrapolate(loads, k, k2, i):
-    """Node i's value on the line through nodes k and k2 (zero: a side where the
-    chamber is not there)."""
-    if not (0 <= k < len(loads) and 0 <= k2 < len(loads)):
-        return 0.0 * loads[i]
-    return loads[k] + (i - k) * (loads[k] - loads[k2]) / (k - k2)
+    base = -_beta0(pair)
+    residue = base + ((phase - base) % period)
+    shift = pair.female_shift
+    out = {}
+    for p in _cut(pair, residue):
+        q = chamber_index(pair, p, residue, shift)
+        force, torque = out.get(q, (np.zeros((2, 2)), np.zeros(2)))
+        out[q] = (force + p.force, torque + p.torque)
+    return residue, out
 
 
 def _tracks(seals_per_node, n, h) -> tuple[Track, ...]:

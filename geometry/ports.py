@@ -97,18 +97,11 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
     if suction_close is not None:
         sc = float(suction_close)
     else:
-        sc = plateau[0] if transport else float(age[imax])
+        sc = plateau[0] if transport else _volume_peak(machine, imax) - float(cur.phi[0])
     if discharge_open is None and volume_ratio == 1.0:
         do = (plateau[1] if transport else sc) - early_opening
     elif discharge_open is None:
-        target = v[imax] / volume_ratio
-        after = np.nonzero(v[imax:] <= target)[0]
-        if not len(after):
-            raise CaseError(f"the chamber never falls to V_max / {volume_ratio:g}: no discharge "
-                            "port can be placed")
-        k = imax + int(after[0])
-        f = (v[k - 1] - target) / (v[k - 1] - v[k])
-        do = float(age[k - 1] + f * (age[k] - age[k - 1])) - early_opening
+        do = _volume_fall(machine, imax, volume_ratio) - float(cur.phi[0]) - early_opening
     else:
         do = float(discharge_open)
     # Without internal compression and without a transport phase the suction closes and
@@ -118,6 +111,31 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
                         f" discharge opens at {math.degrees(do):.1f} deg, the chamber dies at "
                         f"{math.degrees(death):.1f} deg")
     return PortTiming(sc, do, death)
+
+
+def _volume_peak(machine: SweptMachine, imax: int) -> float:
+    """The angle of the largest volume between the table's nodes, on the cubic Hermite
+    through the table's volume and its derivative (the quasi-1D model's volume,
+    :mod:`rotorflow.quasi1d.chamber`): the node's angle errs by up to half a step, a
+    shift of the suction port's closing edge."""
+    from .scalar import hermite_peak
+
+    cur = machine.curves
+    return hermite_peak(cur.phi, cur.volume, cur.dvolume)[0]
+
+
+def _volume_fall(machine: SweptMachine, imax: int, volume_ratio: float) -> float:
+    """The angle after the volume maximum where the volume has fallen to V_max /
+    volume_ratio, both on the cubic Hermite of :func:`_volume_peak`."""
+    from .scalar import hermite_fall, hermite_peak
+
+    cur = machine.curves
+    v_max = hermite_peak(cur.phi, cur.volume, cur.dvolume)[1]
+    try:
+        return hermite_fall(cur.phi, cur.volume, cur.dvolume, v_max / volume_ratio, imax)
+    except ValueError:
+        raise CaseError(f"the chamber never falls to V_max / {volume_ratio:g}: no discharge "
+                        "port can be placed") from None
 
 
 def chamber_section(machine: SweptMachine, phi: float, contacts: list | None = None):
@@ -279,7 +297,7 @@ def ports(machine: SweptMachine, timing: PortTiming, cut_discharge: bool = True,
 
 
 def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray,
-               cut_discharge: bool = True, steps: int = STEP_PER_PERIOD):
+               cut_discharge: bool = True, steps: int | None = None):
     """(suction, discharge): the area through which the chamber is open to each port at
     every age of ``ages`` (its face section inside the port), m2.
 
@@ -287,69 +305,102 @@ def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray,
     open; the port is only part of it, so a chamber opening to the discharge port sees
     an area that grows from nothing (seed 004's point: the early-opened port is small at
     first and throttles the gas).  Without ``cut_discharge`` (no axial discharge port)
-    the discharge areas are zero and that port is not cut.
+    the discharge areas are zero.
 
-    The areas are cut at the ports' own sample ages (:func:`_ages`; a port edge sweeps
-    the chamber's footprint smoothly, and ``steps`` samples per lobe period resolve its
-    opening),
-    linear between.  A sample while the chamber is sealed from a port, and the one
-    where the port closes or opens, is one of the footprints taken out of that port
-    (:func:`ports`): its area there is zero by construction, and not cut; the port's
-    own angle is a node, so the area is zero up to it, not a ramp across a step.
+    By the port model a section F(a) open to the suction port meets it in F(a) less the
+    sections after suction closes; a point of F(a) that the chamber covers in one
+    interval of angles lies in a later section exactly when it lies in the section at
+    closing, F(sc).  Outside :func:`.footprint.crop_region` (where only one rotor's
+    surface passes) every point is covered in one interval, so there the open area is
+    F(a) less F(sc), two sections; inside it (the twin screw's lens between the bores,
+    where a groove pair passes a point once as it is born and once as it dies) the
+    sections after closing are swept (:class:`.footprint.Sweeper`) on the section
+    table's grid, or ``steps`` per lobe period.  The discharge likewise, with the
+    sections before the opening.  Areas are zero where the port is closed, up to and
+    from the timing's own angles.  The suction face's sections lie on the table's grid;
+    the discharge face's (shifted by the wrap) are cut on the section grid and
+    interpolated by cubics (:func:`_hermite`).
     """
+    from .footprint import Sweeper, Surfaces, crop_region
+
+    sec, sw = machine.section, machine.sweep
+    life = sec.phi_f - sec.phi_i
+    h = float(sec.psi[1] - sec.psi[0]) if steps is None else machine.period / steps
+    memo = {}
+
+    def section_at(psi):  # each planar section serves both faces
+        key = round(psi / EPS_AGE)
+        if key not in memo:
+            memo[key] = [q for q in _section(machine, psi) if len(q) >= 3]
+        return memo[key]
+
+    sweeper = Sweeper(Surfaces(machine.pair), section_at, crop_region(machine.pair))
+    ages = np.asarray(ages, dtype=float)
+    sc, do = timing.suction_close, timing.discharge_open
+    lp = _face_areas(section_at, sec, sweeper, ages, (0.0, min(sc, life)), sc,
+                     (sc, min(life, timing.death)), "before", float(sw.scale(0.0)), h)
+    if not cut_discharge:
+        return lp, np.zeros_like(ages)
+    b_open, b_death = do - sw.wrap, timing.death - sw.wrap
+    planar = ages - sw.wrap
+    lo, hi = max(b_open, 0.0), min(b_death, life)
+    grid = h * np.arange(math.floor(lo / h) + 1, math.ceil(hi / h))
+    grid = np.unique(np.concatenate([[lo], grid[(grid > lo + EPS_AGE) & (grid < hi - EPS_AGE)],
+                                     [hi]]))
+    vals = _face_areas(section_at, sec, sweeper, grid, (lo, hi), b_open, (0.0, b_open), "after",
+                       float(sw.scale(sw.length)), h)
+    hp = np.zeros_like(ages)
+    inside = (planar > lo) & (planar < hi)
+    hp[inside] = np.maximum(_hermite(grid, vals, planar[inside]), 0.0)
+    return lp, hp
+
+
+def _face_areas(section_at, sec, sweeper, ages, open_, edge, sealed, side, scale, h):
+    """Areas of the face sections at planar ``ages`` inside their port: open in
+    ``open_`` (ages, exclusive), sealed over ``sealed``, ``edge`` the port's own angle
+    (the sealed window's end on the open side); ``side`` "before" (the sealed sections
+    follow the open ones: suction) or "after" (discharge)."""
     from manifold3d import CrossSection, FillRule
 
-    suction, discharge = ports(machine, timing, cut_discharge, steps)
-    sec = machine.section
-    sw = machine.sweep
-    step = machine.pair.period / steps
-    life = float(ages[-1])
-    out = []
-    for port, shift, face, open_ in ((suction, 0.0, 0.0, (0.0, timing.suction_close)),
-                                     (discharge, sw.wrap, sw.length,
-                                      (timing.discharge_open, timing.death))):
-        # The ports' regular samples (_ages) over [0, life].
-        grid = shift + step * np.arange(math.floor(-shift / step),
-                                        math.ceil((life - shift) / step) + 1)
-        edge = open_[1] if face == 0.0 else open_[0]
-        grid = np.unique(np.concatenate([grid[np.abs(grid - edge) > EPS_AGE], [edge]]))
-        scale = float(sw.scale(face))
-        vals = np.zeros(len(grid))
-        inside = (grid > open_[0] + EPS_AGE) & (grid < open_[1] - EPS_AGE)
-        if port is not None and inside.any():
-            chambers = []
-            for age in grid[inside]:
-                polys = [q for q in _section(machine, sec.phi_i + age - shift) if len(q) >= 3]
-                chambers.append(CrossSection([np.ascontiguousarray(q * scale) for q in polys],
-                                             FillRule.Positive))
-            vals[inside] = _areas_inside(port, chambers)
-        out.append(np.interp(ages, grid, vals))
-    return out[0], out[1]
-
-
-#: Consecutive chamber sections whose port areas are cut from one crop of the port.
-CROP_WINDOW = 8
-
-
-def _areas_inside(port, chambers) -> np.ndarray:
-    """Area of each CrossSection of ``chambers`` inside ``port``.
-
-    A Boolean costs as many port vertices as chamber ones, and a port has ten times
-    a section's; a few consecutive sections lie in a small part of it, so each run of
-    CROP_WINDOW is cut from the port cropped to their bounding box (the same areas up
-    to Clipper's rounding: 6e-10 of the largest on the 4/6 suction port, 40 % faster)."""
-    from manifold3d import CrossSection
-
-    out = np.zeros(len(chambers))
-    for i in range(0, len(chambers), CROP_WINDOW):
-        window = [c for c in chambers[i:i + CROP_WINDOW] if not c.is_empty()]
-        if not window:
+    out = np.zeros(len(ages))
+    inside = (ages > open_[0] + EPS_AGE) & (ages < open_[1] - EPS_AGE)
+    if not inside.any():
+        return out
+    s0, s1 = sealed
+    parts = []
+    if s1 > s0:
+        window = h * np.arange(math.ceil(s0 / h), math.floor(s1 / h) + 1)
+        window = np.unique(np.concatenate([[s0], window[(window > s0 + EPS_AGE)
+                                                         & (window < s1 - EPS_AGE)], [s1]]))
+        parts.append(sweeper.sweep(sec.phi_i + window))
+    rings = [np.ascontiguousarray(q) for q in section_at(sec.phi_i + edge)]
+    if rings:
+        parts.append(CrossSection(rings, FillRule.Positive))
+    sealed_region = parts[0] if len(parts) == 1 else (parts[0] + parts[1] if parts else None)
+    for i in np.nonzero(inside)[0]:
+        rings = [np.ascontiguousarray(q) for q in section_at(sec.phi_i + ages[i])]
+        if not rings:
             continue
-        box = np.array([c.bounds() for c in window]).reshape(-1, 2, 2)
-        lo, hi = box[:, 0].min(0), box[:, 1].max(0)
-        pad = 1e-3 * float(np.max(hi - lo))  # off the sections' own edges
-        lo, hi = lo - pad, hi + pad
-        crop = port ^ CrossSection([np.array([lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]])])
-        for j, c in enumerate(chambers[i:i + CROP_WINDOW]):
-            out[i + j] = 0.0 if c.is_empty() else (c ^ crop).area()
+        f = CrossSection(rings, FillRule.Positive)
+        out[i] = (f - sealed_region).area() if sealed_region is not None else f.area()
+    return out * scale * scale
+
+
+def _hermite(x, y, xq):
+    """Piecewise cubic Hermite through (x, y) with three-point slopes (exact for
+    quadratics; a kink disturbs its own two intervals only), at xq in [x0, x_end]."""
+    x, y, xq = (np.asarray(v, dtype=float) for v in (x, y, xq))
+    if len(x) < 3:
+        return np.interp(xq, x, y)
+    hx = np.diff(x)
+    d = np.diff(y) / hx
+    m = np.empty_like(y)
+    m[1:-1] = (hx[1:] * d[:-1] + hx[:-1] * d[1:]) / (hx[:-1] + hx[1:])
+    m[0] = d[0] - hx[0] * (d[1] - d[0]) / (hx[0] + hx[1])
+    m[-1] = d[-1] + hx[-1] * (d[-1] - d[-2]) / (hx[-1] + hx[-2])
+    k = np.clip(np.searchsorted(x, xq) - 1, 0, len(x) - 2)
+    t = (xq - x[k]) / hx[k]
+    h00, h10 = (1 + 2 * t) * (1 - t) ** 2, t * (1 - t) ** 2
+    h01, h11 = t * t * (3 - 2 * t), t * t * (t - 1)
+    out = h00 * y[k] + h10 * hx[k] * m[k] + h01 * y[k + 1] + h11 * hx[k] * m[k + 1]
     return out

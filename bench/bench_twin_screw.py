@@ -9,8 +9,9 @@ points per period), of the chamber's tip and interlobe sealing lines (at
 LINES_REFERENCE; each kind summed over its lines, as functions of the angle: the
 largest difference from the reference's lines at the same angles, over the
 reference's largest value, with the order each shows against the previous
-resolution), and of the table's port areas (the same measure, against ports sampled
-REFERENCE_PORT_STEPS times per period on the REFERENCE machine).  Target (issue 13):
+resolution), and of the table's port areas (the same measure, against the REFERENCE
+machine's open areas at the same angles, its sealed regions swept REFERENCE_PORT_STEPS
+times per period).  Target (issue 13):
 geometry figures and table of a 4/6 pair at 1e-4 relative error in under 1 s.
 """
 
@@ -37,8 +38,11 @@ RESOLUTIONS = (24, 48, 96, 192)
 #: 1536 (circular 1e-8).  (As the loads' linear interpolant it converged at first order:
 #: 192 left it 1.2e-4 from its limit.)
 REFERENCE = 768
-#: Port samples per period of the reference's ports (the table's: ports.STEP_PER_PERIOD).
-REFERENCE_PORT_STEPS = 384
+#: Samples per period of the reference's swept sealed regions (a table's: its section
+#: grid, twice its points per period).  The 192 points per period's tables (384) are
+#: 3e-5 (pin-cycloid) and 1.1e-4 (circular) of the largest discharge area off it; its
+#: own section grid (1536) costs a section cut per sample.
+REFERENCE_PORT_STEPS = 768
 #: The lines' reference.  From 384 points per period on, the pin-cycloid's interlobe
 #: lines to the chambers 4 and 6 periods on shrink by 4e-3 and 1.5e-2 (768) against
 #: their values at 24 to 192, which agree to 1e-7: the tracks' presence and offsets
@@ -74,11 +78,13 @@ def _line_error(m, ref, kind):
 
 
 def _reference_ports(case, ref):
-    """(angles, suction areas, discharge areas) of the reference machine's finely
-    sampled ports, against the absolute angle (each resolution has its own birth node)."""
-    ages = ref.curves.phi - ref.curves.phi[0]
-    lp, hp = open_areas(ref, case_port_timing(case, ref), ages, steps=REFERENCE_PORT_STEPS)
-    return ref.curves.phi, lp, hp
+    """(angles, suction areas, discharge areas) of the reference machine at every
+    resolution's table angles (absolute: each resolution has its own birth node)."""
+    phi = np.unique(np.concatenate([SweptMachine(case.pair, case.sweep(None), ppp).curves.phi
+                                    for ppp in RESOLUTIONS]))
+    lp, hp = open_areas(ref, case_port_timing(case, ref), phi - ref.curves.phi[0],
+                        steps=REFERENCE_PORT_STEPS)
+    return phi, lp, hp
 
 
 def _port_errors(m, table, ports):

@@ -117,3 +117,54 @@ def periodic_peak(values) -> tuple[float, float]:
         return float(k), b
     t = 0.5 * (a - c) / curvature
     return k + t, b - 0.25 * (a - c) * t
+
+
+def hermite_coefficients(x0: float, x1: float, y0: float, y1: float, d0: float, d1: float):
+    """(a, b, c, e) of the cubic Hermite through (x0, y0) with slope d0 and (x1, y1) with
+    slope d1, as a + b t + c t^2 + e t^3 in t = (x - x0) / (x1 - x0)."""
+    h = x1 - x0
+    return (y0, h * d0, 3.0 * (y1 - y0) - h * (2.0 * d0 + d1), 2.0 * (y0 - y1) + h * (d0 + d1))
+
+
+def hermite_peak(x, y, dy) -> tuple[float, float]:
+    """(x, value) of the largest value of the piecewise cubic Hermite through (x, y) with
+    slopes dy, near its largest sample: where its slope turns from rising to falling in
+    the intervals on either side (the sample itself where it does not)."""
+    import numpy as np
+
+    x, y, dy = (np.asarray(v, dtype=float) for v in (x, y, dy))
+    k = int(np.argmax(y))
+    best = (float(x[k]), float(y[k]))
+    for i in (k - 1, k):
+        if i < 0 or i + 1 >= len(x):
+            continue
+        a, b, c, e = hermite_coefficients(x[i], x[i + 1], y[i], y[i + 1], dy[i], dy[i + 1])
+        # p'(t) = b + 2 c t + 3 e t^2: its roots in [0, 1] where it turns downwards.
+        roots = np.roots([3.0 * e, 2.0 * c, b]) if abs(e) + abs(c) > 0.0 else np.array([])
+        for t in roots:
+            if abs(t.imag) > 1e-12 or not 0.0 <= t.real <= 1.0:
+                continue
+            t = float(t.real)
+            if 2.0 * c + 6.0 * e * t <= 0.0:
+                val = a + b * t + c * t * t + e * t ** 3
+                if val > best[1]:
+                    best = (float(x[i] + t * (x[i + 1] - x[i])), float(val))
+    return best
+
+
+def hermite_fall(x, y, dy, level: float, start: int) -> float:
+    """The first x after sample ``start`` where the piecewise cubic Hermite through (x, y)
+    with slopes dy falls to ``level``, located between the samples that bracket it.
+    Raises ValueError if it never does."""
+    import numpy as np
+
+    y = np.asarray(y, dtype=float)
+    below = np.nonzero(y[start:] <= level)[0]
+    if not len(below):
+        raise ValueError(f"the samples never fall to {level}")
+    k = start + int(below[0])
+    if y[k] == level or k == 0:
+        return float(x[k])
+    a, b, c, e = hermite_coefficients(x[k - 1], x[k], y[k - 1], y[k], dy[k - 1], dy[k])
+    t = root(lambda t: a + b * t + c * t * t + e * t ** 3 - level, 0.0, 1.0, xtol=1e-15)
+    return float(x[k - 1] + t * (x[k] - x[k - 1]))

@@ -43,6 +43,12 @@ def _deg(x):
     return math.degrees(x)
 
 
+def _volume_peak(m: SweptMachine, k_max: int) -> float:
+    from .ports import _volume_peak
+
+    return _volume_peak(m, k_max)
+
+
 def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
     """The family's own figures, then the sweep's, volumes, loads and port timing."""
     m = machine or build_machine(case)
@@ -86,10 +92,11 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
         "power_balance_error": split.power_balance_error,
         "chamber_volume_max_m3": m.volume_max,
         "swept_volume_m3": m.swept_volume,
-        "angle_volume_max_deg": _deg(phi[k_max] - phi[0]),
+        # between the nodes, as the suction port closes there (:func:`.ports.port_timing`)
+        "angle_volume_max_deg": _deg(_volume_peak(m, k_max) - phi[0]),
         "angle_suction_close_deg": _deg(suction_close - phi[0]),
         "angle_discharge_open_deg": _deg(discharge_open - phi[0]),
-        "volume_suction_close_m3": float(np.interp(suction_close, phi, cur.volume)),
+        "volume_suction_close_m3": float(m.volume_at(suction_close)[0]),
         "chamber_life_deg": _deg(phi[-1] - phi[0]),
         "volume_ratio": case.volume_ratio,
         **radial,

@@ -93,3 +93,29 @@ def test_periodic_peak_wraps_round_the_period():
     pos, value = periodic_peak(y)
     assert value == pytest.approx(1.0, abs=1e-4)
     assert 0.0 <= pos < 1.0 or pos > n - 1
+
+
+def test_hermite_peak_and_fall_converge_on_a_smooth_curve():
+    """The cubic Hermite through samples of cos(x - 0.3) and its derivative finds the
+    peak (x = 0.3, value 1) and the fall to 0.5 (x = 0.3 + pi/3) between the samples,
+    where the largest sample is off by up to half a step.  From 16 to 128 intervals
+    the errors fall at about third order or better (measured 3.3 for the peak's place,
+    3.6 for its value, 4.8 for the fall; from step to step they scatter, 2 to 6.7, with
+    where the samples fall)."""
+    import math
+
+    import numpy as np
+
+    from rotorflow.geometry.scalar import hermite_fall, hermite_peak
+
+    errors = []
+    for n in (16, 128):
+        x = np.linspace(-2.0, 2.0, n + 1)
+        y, dy = np.cos(x - 0.3), -np.sin(x - 0.3)
+        xp, vp = hermite_peak(x, y, dy)
+        fall = hermite_fall(x, y, dy, 0.5, int(np.argmax(y)))
+        errors.append((abs(xp - 0.3), abs(vp - 1.0), abs(fall - 0.3 - math.pi / 3)))
+    errors = np.array(errors)
+    assert errors[-1].max() < 1e-6  # the largest sample: 0.0125 off
+    orders = np.log2(errors[0] / errors[1]) / 3.0
+    assert np.all(orders > 3.0), orders

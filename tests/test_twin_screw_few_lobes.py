@@ -29,6 +29,7 @@ from rotorflow.errors import CaseError
 from rotorflow.geometry.forces import power_split
 from rotorflow.geometry.machine import SweptMachine, _extend
 from rotorflow.geometry.ports import port_timing
+from rotorflow.geometry.scalar import minimum
 from rotorflow.geometry.sweep import Sweep
 from rotorflow.geometry.twin_screw.contact_line import contact_line_length
 from rotorflow.geometry.twin_screw.family import build, centred_tip_radius
@@ -198,12 +199,16 @@ def test_volume_ratio_one_discharges_at_the_end_of_transport():
     assert power_split(machine(1, 96), 1.0, p_discharge=2.0e5).power_balance_error < 5e-5
     with pytest.raises(ValueError, match="discharge pressure"):
         power_split(m, 1.0)
-    # No plateau: suction closes and discharge opens together, at the volume maximum.
+    # No plateau: suction closes and discharge opens together, at the volume maximum
+    # (between the table's nodes, 7.5 deg apart here: by the machine's own quadrature,
+    # 7e-4 deg).
     short = SweptMachine(pair(1), Sweep("helical", 0.2, math.radians(400.0)), PPP)
     timing = port_timing(short, 1.0)
     k = int(np.argmax(short.curves.volume))
+    phi = short.curves.phi
+    peak, _ = minimum(lambda p: -float(short.volume_at(p)[0]), phi[k - 1], phi[k + 1])
     assert timing.suction_close == timing.discharge_open == \
-        pytest.approx(short.curves.phi[k] - short.curves.phi[0], abs=1e-12)
+        pytest.approx(peak - phi[0], abs=math.radians(0.01))
 
 
 CASE = """[machine]

@@ -1,8 +1,9 @@
 """The end-plate ports of a twin screw (geometry/ports.py) on the section table's grid.
 
 Independent references: the chamber's section cut afresh (a pair with no memo of cut
-sections) at the port's own angles, intersected with the port by Clipper; the port
-model's own construction (a footprint taken out of a port meets it nowhere).
+sections) intersected with the port shapes by Clipper; the port model's own
+construction (a footprint taken out of a port meets it nowhere).  The table's open
+areas themselves: tests/test_twin_screw_port_areas.py.
 """
 
 from __future__ import annotations
@@ -49,17 +50,22 @@ def _fresh_area(case, machine, port, psi, scale=1.0):
 
 
 def test_ports_reuse_the_table_cuts(built):
-    # Only the port timing's own angles (here the discharge opening; suction closes at a
-    # table node) cost a section of their own.
+    # Only the port timing's own angles (suction closing and the discharge opening, both
+    # between the table's nodes) cost a section of their own: the open areas' sweeps
+    # and the shapes' samples lie on the section table's grid.
     case, *_ , table_cuts, _ = built
-    assert 1 <= len(set(case.pair.cut_memo) - table_cuts) <= 2
+    assert len(set(case.pair.cut_memo) - table_cuts) == 2
 
 
-def test_open_areas_at_port_samples_equal_a_direct_cut(built):
+def test_port_shapes_offer_the_open_areas(built):
+    """The port shapes (for solids and CFD cases) are unions of sampled sections, the
+    table's areas the sections less the exact sealed region: a section cut afresh
+    inside the shapes has the table's open area up to the shapes' sampling strips
+    (measured 7e-4 suction, 5.3e-2 discharge of the largest area), at angles on the
+    shapes' samples."""
     case, m, timing, (suction, discharge), _, _ = built
     sec, sw = m.section, m.sweep
     step = m.period / P.STEP_PER_PERIOD
-    # Samples of the ports (_ages): ages shift + whole steps, open to the port.
     lp_ages = step * np.arange(2, int(timing.suction_close / step), 9)
     hp_ages = sw.wrap + step * np.arange(int((timing.discharge_open - sw.wrap) / step) + 1,
                                          int((timing.death - sw.wrap) / step), 5)
@@ -67,10 +73,8 @@ def test_open_areas_at_port_samples_equal_a_direct_cut(built):
     lp, hp = P.open_areas(m, timing, np.concatenate([lp_ages, hp_ages]))
     direct_lp = [_fresh_area(case, m, suction, sec.phi_i + a) for a in lp_ages]
     direct_hp = [_fresh_area(case, m, discharge, sec.phi_i + a - sw.wrap) for a in hp_ages]
-    # Clipper's rounding, and the port cropped per window (ports._areas_inside): 1e-8.
-    scale = max(lp.max(), hp.max())
-    assert np.abs(lp[:len(lp_ages)] - direct_lp).max() < 1e-8 * scale
-    assert np.abs(hp[len(lp_ages):] - direct_hp).max() < 1e-8 * scale
+    assert np.abs(lp[:len(lp_ages)] - direct_lp).max() < 5e-3 * lp.max()
+    assert np.abs(hp[len(lp_ages):] - direct_hp).max() < 1e-1 * hp.max()
     assert min(direct_lp) > 0.0 and max(direct_hp) > 0.0  # the samples are open
 
 

@@ -1,0 +1,179 @@
+"""Slivers born and dying, and pockets handed over, between two sampled sections (the
+events of :mod:`.footprint`), found by moving a section's rotor pieces rigidly.
+
+A ring of a section with no piece matched at the neighbouring sample came or went in
+between.  Moved rigidly towards that sample (each rotor vertex turned about its axis,
+the still vertices kept), its area falls: where it falls to nearly nothing and the
+median gap of a rotor piece to the rest of the ring changes sign, a sliver closes
+there; where the area is least inside the step, a pocket was handed over there.  A
+sliver's passage is swept per vertex, each from where its own gap closes (a sliver may
+open along its length over a while); a pocket's, rigidly from the least area on.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .surfaces import area as _area
+from .surfaces import turn as _turn
+
+#: Sub-steps of a step scanned for a sliver's birth or death or a pocket's least area.
+EVENT_SCAN = 8
+#: How far (reference angle, rad) a sliver's birth is looked for behind the sample that
+#: first holds it (its death ahead of the last), at least two steps: the samples of its
+#: first 0.2 deg hold none of it (THIN).
+EVENT_REACH = 0.02
+#: A ring whose area, its rotor pieces moved rigidly, falls to this fraction of its own
+#: within the search closes there (a sliver's birth or death is looked for near it).
+CLOSING = 0.05
+#: Vertices of a rotor piece whose median gap locates a sliver's birth or death, and
+#: whose own births are found (the rest interpolated).
+GAP_POINTS = 33
+#: Bisections of a vertex's own birth in its scan interval (to 2^-8 of it).
+BISECT = 8
+
+
+class Events:
+    """The event methods of :class:`.footprint.Sweeper` (a mixin: it needs the sweeper's
+    ``surfaces``)."""
+
+    def _event(self, smp, ring_index, h, sign):
+        """(|dpsi|, kind) of the event of ring ``ring_index`` of sample ``smp`` within h
+        in the direction ``sign`` (-1: back to a birth, +1: on to a death), found by
+        moving its rotor vertices rigidly: "sliver" where a rotor piece's signed gap to
+        the rest of the ring vanishes, "pocket" where the ring's area is least; None."""
+        ring, cls = smp.rings[ring_index]
+        a0 = _area(ring)
+        orient = 1.0 if a0 > 0.0 else -1.0
+        # A sliver is looked for beyond the step: the samples right after its birth
+        # hold none of it (THIN).  The ring's area, cheap, brackets where it closes;
+        # the median gap of its rotor pieces then tells a sliver.
+        reach = max(2.0 * h, EVENT_REACH)
+        ds = np.linspace(0.0, reach, int(math.ceil(EVENT_SCAN * reach / h)) + 1)
+        areas = np.array([_area(self._moved(ring, cls, sign * d)) for d in ds]) * orient
+        drop = np.nonzero(areas <= CLOSING * areas[0])[0]
+        if len(drop):
+            # From before the drop to past the least area (where the pieces, moved on
+            # through each other, part again).
+            j = drop[0]
+            while j + 1 < len(ds) and areas[j + 1] < areas[j]:
+                j += 1
+            lo, hi = ds[max(drop[0] - 1, 0)], ds[min(j + 1, len(ds) - 1)]
+            for k in sorted(set(cls[cls >= 0].tolist())):
+                fine = np.linspace(lo, hi, 2 * (j + 2 - drop[0]) + 1)
+                gaps = [self._gap(ring, cls, k, sign * d, orient) for d in fine]
+                for i in range(1, len(fine)):
+                    if gaps[i] <= 0.0 < gaps[i - 1]:
+                        # (roughly: each vertex's own birth is found where it is swept,
+                        # _births)
+                        w = gaps[i - 1] / (gaps[i - 1] - gaps[i])
+                        return float(fine[i - 1] + w * (fine[i] - fine[i - 1])), "sliver"
+        areas = np.abs(areas[ds <= h * (1.0 + 1e-12)])
+        i = int(np.argmin(areas))
+        if 0 < i < len(areas) - 1:
+            from .scalar import minimum
+
+            d, _ = minimum(lambda x: abs(_area(self._moved(ring, cls, sign * x))),
+                           float(ds[i - 1]), float(ds[i + 1]), xtol=1e-9)
+            return d, "pocket"
+        return None
+
+    def _moved(self, ring, cls, dpsi):
+        q = ring.copy()
+        for k in range(len(self.surfaces.rotors)):
+            on = cls == k
+            q[on] = self.surfaces.move(ring[on], k, dpsi)
+        return q
+
+    def _gap(self, ring, cls, k, dpsi, orient) -> float:
+        """Median signed distance of the ring's rotor-k vertices, all moved rigidly by
+        dpsi, to the ring's other edges (positive inside the ring)."""
+        on = cls == k
+        if not on.any() or np.all(on & np.roll(on, -1)):
+            return 0.0
+        x = ring[on]
+        x = x[np.linspace(0, len(x) - 1, min(len(x), GAP_POINTS)).astype(int)]
+        return float(np.median(self._gaps(ring, cls, k, x, np.array([dpsi]), orient)[0]))
+
+    def _gaps(self, ring, cls, k, x, dpsi, orient) -> np.ndarray:
+        """Signed distances (len(dpsi), len(x)) of points x of rotor k, each moved
+        rigidly by each dpsi with the ring, to the ring's edges not along rotor k."""
+        return np.array([self._gaps_each(ring, cls, k, x, np.full(len(x), d), orient)
+                         for d in dpsi])
+
+    def _gaps_each(self, ring, cls, k, x, dpsi, orient) -> np.ndarray:
+        """Signed distance of each point x[v] of rotor k, moved rigidly by dpsi[v] with
+        the ring, to the ring's edges not along rotor k (positive inside the ring)."""
+        on = cls == k
+        other = np.nonzero(~(on & np.roll(on, -1)))[0]
+        ends = np.concatenate([other, (other + 1) % len(ring)])
+        q = np.broadcast_to(ring[ends], (len(x), len(ends), 2)).copy()
+        for c, (axis, ratio, *_rest) in enumerate(self.surfaces.rotors):
+            sel = cls[ends] == c
+            if sel.any():
+                q[:, sel] = _turn(ring[ends][sel] - axis, ratio * dpsi) + axis
+        axis, ratio = self.surfaces.rotors[k][:2]
+        y = _turn((x - axis)[:, None], ratio * dpsi)[:, 0] + axis
+        a, b = q[:, :len(other)], q[:, len(other):]
+        ab = b - a
+        t = np.clip(np.einsum("vek,vek->ve", y[:, None] - a, ab)
+                    / np.maximum(np.einsum("vek,vek->ve", ab, ab), 1e-300), 0.0, 1.0)
+        dist = np.linalg.norm(y[:, None] - (a + t[..., None] * ab), axis=-1)
+        j = np.argmin(dist, axis=1)
+        v = np.arange(len(x))
+        rel = y - a[v, j]
+        side = np.sign(ab[v, j, 0] * rel[:, 1] - ab[v, j, 1] * rel[:, 0]) * orient
+        return side * dist[v, j]
+
+    def _births(self, ring, cls, chain, dpsi) -> np.ndarray:
+        """Per vertex of ``chain`` (a piece of a sliver found born or dying |dpsi| away,
+        by the median of its gap), the rigid move (signed) to where its own gap closes:
+        a sliver may open along its length over a while (a zipper), and the points each
+        vertex passes are swept from its own opening.  Found on GAP_POINTS vertices
+        (the rest interpolated along the chain), scanned over twice |dpsi| and bisected."""
+        orient = 1.0 if _area(ring) > 0.0 else -1.0
+        n = len(chain.points)
+        pick = np.unique(np.linspace(0, n - 1, min(n, GAP_POINTS)).astype(int))
+        x = chain.points[pick]
+        ds = np.linspace(0.0, 2.0 * abs(dpsi), 2 * EVENT_SCAN + 1) * np.sign(dpsi)
+        g = self._gaps(ring, cls, chain.rotor, x, ds, orient)
+        crossed = (g[1:] <= 0.0) & (g[:-1] > 0.0)
+        found = crossed.any(axis=0)
+        if not found.any():
+            return np.full(n, dpsi)
+        first = np.argmax(crossed, axis=0)
+        lo, hi = ds[first], ds[first + 1]
+        for _ in range(BISECT):
+            mid = 0.5 * (lo + hi)
+            open_ = self._gaps_each(ring, cls, chain.rotor, x, mid, orient) > 0.0
+            lo, hi = np.where(open_, mid, lo), np.where(open_, hi, mid)
+        own = 0.5 * (lo + hi)
+        return np.interp(np.arange(n), pick[found], own[found])
+
+    def _rigid(self, smp, ring_index, dpsi, kind):
+        """The passage of ring ``ring_index`` of ``smp`` between its event (dpsi away)
+        and the sample, swept rigidly: each rotor piece's band, and a pocket's own
+        region at the event."""
+        from manifold3d import CrossSection, FillRule
+
+        from .footprint import ring_section
+
+        out = []
+        ring, cls = smp.rings[ring_index]
+        for c in smp.chains:
+            if c.ring == ring_index:
+                if kind == "sliver":
+                    own = self._births(ring, cls, c, dpsi)
+                    axis, ratio = self.surfaces.rotors[c.rotor][:2]
+                    moved = _turn((c.points - axis)[:, None], ratio * own)[:, 0] + axis
+                else:
+                    moved = self.surfaces.move(c.points, c.rotor, dpsi)
+                out.append(ring_section(np.concatenate([c.points, moved[::-1]])))
+        if kind == "pocket":
+            out.append(CrossSection([np.ascontiguousarray(self._moved(ring, cls, dpsi))],
+                                    FillRule.NonZero))
+        return out
+
+

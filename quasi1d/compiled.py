@@ -82,7 +82,8 @@ def _cached() -> bool:
 def _entries():
     from . import kernel
 
-    return (kernel.rhs_fused, kernel.segment_fused, kernel.segment_ros23)
+    return (kernel.rhs_fused, kernel.rhs_segment, kernel.segment_fused,
+            kernel.segment_ros23)
 
 
 def _helpers():
@@ -149,6 +150,7 @@ class Compiled(NamedTuple):
     per segment)."""
 
     rhs: object
+    rhs_segment: object  # the first right-hand side of a segment, from its step's args
     rk_step: object  # the steps' identities: integrate dispatches segments by them
     segment: object
     ros23_step: object
@@ -179,7 +181,8 @@ def _compile():
     # error_model "numpy": a trial state's division by zero gives inf/nan (rejected by
     # the step control) as in numpy, not an exception
     jit = numba.njit(cache=True, error_model="numpy")
-    return Compiled(jit(kernel.rhs_fused), kernel.rk_step_fused, jit(kernel.segment_fused),
+    return Compiled(jit(kernel.rhs_fused), jit(kernel.rhs_segment), kernel.rk_step_fused,
+                    jit(kernel.segment_fused),
                     kernel.ros23_step_fused, jit(kernel.segment_ros23))
 
 

@@ -48,6 +48,12 @@ ANDERSON_MEMORY = 5
 # Finite-difference step of the Jacobian, relative to each component's reference scale:
 # large against round-off (1e-16 / 1e-6) and small against curvature.
 FD_STEP = 1.0e-6
+# Chord periods: once a Newton step is this small (relative to the scales), the next
+# periods integrate the state alone (no perturbed batch, ~1/10 of the cost) and step with
+# the last Jacobian, whose error is then of the order of the step times the residual.
+# A chord period that does not cut the residual by CHORD_GAIN brings the batch back.
+CHORD_BELOW = 1.0e-2
+CHORD_GAIN = 0.1
 
 
 @dataclass
@@ -105,20 +111,23 @@ def _unknowns(model: ChamberModel) -> np.ndarray:
     return idx[alive]
 
 
-def _update_best(model, run, z, z_next, idx, dz, norm, best, lam, figures):
+def _update_best(model, run, z, z_next, idx, dz, norm, best, lam, figures, J=None):
     """Keep the iterate with the smallest residual and its Newton step (None when the
-    Jacobian is singular or the step not finite); a worse iterate halves the damping."""
+    Jacobian is singular or the step not finite); a worse iterate halves the damping.
+    The Jacobian of Phi(z) - z is the batch's finite differences, or ``J`` (a chord
+    period's: the state was integrated alone). Returns (best, damping, Jacobian)."""
     if not (best is None or norm < best[0]):  # (a NaN residual is never the best)
-        return best, lam * 0.5
-    Phi = np.stack([model.shift(yy)[idx] for yy in run.y[1:]])  # row i: input i
-    J = ((Phi - z_next[idx]) / dz[:, None]).T - np.eye(idx.size)
+        return best, lam * 0.5, J
+    if run.y.shape[0] > 1:
+        Phi = np.stack([model.shift(yy)[idx] for yy in run.y[1:]])  # row i: input i
+        J = ((Phi - z_next[idx]) / dz[:, None]).T - np.eye(idx.size)
     try:
         step = np.linalg.solve(J, -(z_next - z)[idx])
     except np.linalg.LinAlgError:
         step = None
     if step is not None and not np.all(np.isfinite(step)):
         step = None
-    return (norm, z, run, step, z_next, figures), 1.0
+    return (norm, z, run, step, z_next, figures), 1.0, J
 
 
 def _damped(model, best, idx, lam):
@@ -167,8 +176,9 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
             message = (f"stopped at the time budget of {num.max_seconds:g} s ([numerics] "
                        f"max_seconds) after {cycles} periods: ")
             break
-        Y0 = np.repeat(z[None], d + 1 if newton else 1, axis=0)
-        if newton:
+        batch = newton and not nw.chord
+        Y0 = np.repeat(z[None], d + 1 if batch else 1, axis=0)
+        if batch:
             Y0[np.arange(1, d + 1), idx] += dz
         run = integrate_period(model, Y0, method, rtol, atol, replay=replay,
                                record=record, max_steps=num.max_steps,
@@ -229,6 +239,9 @@ class _NewtonState:
     lam: float = 1.0  # damping of the next step from the best iterate
     mark: float = np.inf  # the best residual when it last halved
     since_gain: int = 0  # periods since
+    J: np.ndarray | None = None  # the last batch's Jacobian of Phi(z) - z
+    chord: bool = False  # the next period integrates the state alone (CHORD_BELOW)
+    last: float = np.inf  # the residual of the last period
 
 
 def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figures):
@@ -238,8 +251,14 @@ def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figur
     ("anderson", the best iterate's image) when the best residual has not halved in
     NEWTON_PATIENCE periods."""
     norm = float(np.max(np.abs(z_next - z)[idx] / scales[idx]))
-    nw.best, nw.lam = _update_best(model, run, z, z_next, idx, dz, norm, nw.best, nw.lam,
-                                   figures)
+    was_chord = run.y.shape[0] == 1
+    nw.best, nw.lam, nw.J = _update_best(model, run, z, z_next, idx, dz, norm, nw.best,
+                                         nw.lam, figures, nw.J)
+    step = nw.best[3]
+    nw.chord = (step is not None and nw.best[1] is z and nw.lam >= 1.0
+                and float(np.max(np.abs(step) / scales[idx])) < CHORD_BELOW
+                and not (was_chord and not norm <= CHORD_GAIN * nw.last))
+    nw.last = norm
     if nw.best[0] < 0.5 * nw.mark:
         nw.mark, nw.since_gain = nw.best[0], 0
     else:

@@ -87,7 +87,9 @@ class ThermallyPerfectGas:
         return T
 
     def T_u(self, u):
-        return self._solve_T(self.u_T, u, self.cv, np.asarray(u) / (2.5 * self.R))
+        # from the table's T (within ~1e-6), so that Newton converges in one or two
+        # steps: the events call this every period (issue 19: per-point overheads)
+        return self._solve_T(self.u_T, u, self.cv, self._interp(u)[0])
 
     # -- the table of T(u) ----------------------------------------------------------------
     @functools.cached_property
@@ -95,7 +97,7 @@ class ThermallyPerfectGas:
         T_lo, T_hi = THERMALLY_PERFECT_T_RANGE
         u_lo, u_hi = float(self.u_T(T_lo)), float(self.u_T(T_hi))
         ug = np.linspace(u_lo, u_hi, THERMALLY_PERFECT_NODES)
-        Tg = self.T_u(ug)
+        Tg = self._solve_T(self.u_T, ug, self.cv, ug / (2.5 * self.R))
         cv = self.cv(Tg)
         return (u_lo, (u_hi - u_lo) / (ug.size - 1), ug.size,
                 np.stack([Tg, (cv + self.R) / cv, 1.0 / cv]))

@@ -102,6 +102,9 @@ class PeriodRun:
     method: str = ""
     trace_theta: list = field(default_factory=list)
     trace_y: list = field(default_factory=list)
+    # f(theta, y) at the trace's points where the integrator had it (the explicit and
+    # Rosenbrock steps), for the dense traces; shorter than trace_y when it has not
+    trace_f: list = field(default_factory=list)
     replayed: bool = False
 
 
@@ -142,6 +145,8 @@ def _period(model, y0, method, rtol, atol, replay, record, max_steps, h0, stiff_
             run.trace_theta.append(seg.start)
             run.trace_y.append(y[0].copy())
         if seg.end <= seg.start:
+            if record and len(run.trace_f) == len(run.trace_y) - 1:
+                run.trace_f.append(np.full(y.shape[1], np.nan))  # (never interpolated)
             run.steps.append([])
             continue
         if method in ("radau", "bdf"):
@@ -214,11 +219,21 @@ def _run_segment(model, seg, step, ends, y, k1, h, rtol, atol, order, budget, sl
     return stepping.segment(step[0], step[1], *rest)
 
 
+def _first_rhs(model, seg, step, y):
+    """f(start, y) of the segment: compiled where its step is (a numpy right-hand side
+    costs ~80 us, four times the compiled batch; issue 19's per-point overheads)."""
+    fast = getattr(model, "fast", {}).get("kernel")
+    if fast is not None and step[0] in (fast.rk_step, fast.ros23_step):
+        return fast.rhs_segment(seg.start, np.ascontiguousarray(y), step[1])
+    return model.rhs(seg.start, y, seg)
+
+
 def _adaptive(model, seg, y, step, stages, order, rtol, atol, h, run, record, budget,
               stiff_error):
+    k1 = _first_rhs(model, seg, step, y)
     status, t, y, h, ends, trace, tried, rejected = _run_segment(
-        model, seg, step, np.empty(0), y, model.rhs(seg.start, y, seg),
-        np.nan if h is None else float(h), rtol, atol, order, budget[0], 0.0, record)
+        model, seg, step, np.empty(0), y, k1, np.nan if h is None else float(h), rtol,
+        atol, order, budget[0], 0.0, record)
     budget[0] -= tried
     run.n_rhs += 1 + stages * tried
     run.n_rejected += rejected
@@ -233,26 +248,32 @@ def _adaptive(model, seg, y, step, stages, order, rtol, atol, h, run, record, bu
             raise _Stiff
         raise IntegrationError(f"step size underflow near angle {t:.6f} rad (state "
                                "not finite or tolerance unreachable)")
-    _record(run, ends, trace, record)
+    _record(run, ends, trace, record, k1)
     return y, list(ends), h
 
 
 def _replay(model, seg, y, step, stages, rtol, atol, ends, run, record, slack):
     ends = np.asarray(ends, dtype=float)
+    k1 = _first_rhs(model, seg, step, y)
     status, _, y, _, _, trace, taken, _ = _run_segment(
-        model, seg, step, ends, y, model.rhs(seg.start, y, seg), np.nan, rtol, atol, 0,
-        0, slack, record)
+        model, seg, step, ends, y, k1, np.nan, rtol, atol, 0, 0, slack, record)
     run.n_rhs += 1 + stages * taken
     if status != stepping.DONE:
         return False, None, None
-    _record(run, ends, trace, record)
+    _record(run, ends, trace, record, k1)
     return True, y, list(ends)
 
 
-def _record(run, ends, trace, record):
+def _record(run, ends, trace, record, k1):
+    """Add a segment's steps to the trace; f at its start (k1) beside the start's state,
+    which the period recorded before the segment ran."""
     if record:
+        S = trace.shape[1] // 2
         run.trace_theta.extend(ends.tolist())
-        run.trace_y.extend(trace)
+        run.trace_y.extend(trace[:, :S])
+        if len(run.trace_f) == len(run.trace_y) - len(ends) - 1:
+            run.trace_f.append(k1[0].copy())
+            run.trace_f.extend(trace[:, S:])
 
 
 def _scipy(model, seg, y, method, rtol, atol, run, record):

@@ -179,12 +179,14 @@ def _axial(table, name: str, fluid_torque: np.ndarray, dp: float):
 def fine_traces(result: SimulationResult) -> dict:
     """The machine traces of the converged period at TRACE_REFINEMENT times the steps:
     cubic Hermite interpolation of the state between the recorded steps of each segment,
-    from the state and the right-hand side at both ends (the period's own solution, one
-    right-hand side per recorded step instead of a replayed integration)."""
+    from the state and the right-hand side at both ends (the period's own solution: the
+    derivatives its steps recorded, or one right-hand side per recorded step, instead of
+    a replayed integration)."""
     sol = result.solution
     model, run = sol.model, sol.run
     th = np.asarray(run.trace_theta, float)
     ys = np.asarray(run.trace_y, float)
+    fs = np.asarray(run.trace_f, float) if len(run.trace_f) == len(th) else None
     counts = [1 + len(ends) for ends in run.steps]
     if sum(counts) != len(th) or len(counts) != len(model.segments):
         return result.machine  # a trace not laid out by segment: keep the steps
@@ -198,7 +200,8 @@ def fine_traces(result: SimulationResult) -> dict:
             fine_y.append(y[:1])
             if count < 2:
                 continue
-            f = model.rhs(t, y, seg)  # every recorded step at its own angle, one call
+            # the integrator's own derivatives, else every recorded step's, in one call
+            f = fs[first - count:first] if fs is not None else model.rhs(t, y, seg)
             h = np.diff(t)[:, None, None]
             s = np.linspace(0.0, 1.0, TRACE_REFINEMENT + 1)[1:][None, :, None]
             h00, h10 = (1 + 2 * s) * (1 - s) ** 2, s * (1 - s) ** 2

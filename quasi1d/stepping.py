@@ -135,7 +135,9 @@ def segment(step, args, t, t_end, replay, y, k1, h, rtol, atol, order, budget, s
             record):
     """Integrate from t to t_end: through the step ends ``replay`` where it has any, else
     choosing the steps.  Returns (status, t reached, y, h for the next segment, step
-    ends, trace of y[0] at them (empty unless ``record``), steps tried, steps rejected);
+    ends, trace of y[0] and f(t, y)[0] side by side at them (empty unless ``record``: the
+    derivative, which every step has at its end, serves the dense traces), steps tried,
+    steps rejected);
     status OVER_BUDGET once ``budget`` steps were tried, UNDERFLOW when the step shrinks
     to nothing, REPLAY_MISSED where a replayed step's error exceeds ``slack`` times the
     tolerance (the caller then chooses its own steps).  One loop and one call of
@@ -150,7 +152,8 @@ def segment(step, args, t, t_end, replay, y, k1, h, rtol, atol, order, budget, s
     if not replaying:
         h = min(h, span)
     ends = np.empty(max(replay.size, 16))
-    trace = np.empty((ends.size if record else 0, y.shape[1]))
+    S = y.shape[1]
+    trace = np.empty((ends.size if record else 0, 2 * S))
     n = tried = rejected = 0
     status = DONE
     while n < replay.size if replaying else t < t_end:
@@ -171,7 +174,8 @@ def segment(step, args, t, t_end, replay, y, k1, h, rtol, atol, order, budget, s
             ends, trace = _grow(ends, trace, n, record)
             ends[n] = t
             if record:
-                trace[n] = y[0]
+                trace[n, :S] = y[0]
+                trace[n, S:] = k1[0]
             n += 1
             if not replaying:
                 fac = GROW_MAX if en == 0.0 else min(GROW_MAX, SAFETY * en ** (-1.0 / order))

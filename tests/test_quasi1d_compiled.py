@@ -172,6 +172,32 @@ def test_compiled_cycle_equals_numpy(table, monkeypatch, name):
             assert got[key] == pytest.approx(ref[key], rel=CYCLE_RTOL), key
 
 
+@pytest.mark.parametrize("kernel", ["0", "1"])
+@pytest.mark.parametrize("name", list(CASES)[:2])
+def test_recorded_derivatives_are_the_right_hand_side(table, monkeypatch, name, kernel):
+    """The derivatives the steps record beside the trace (the dense traces' Hermite
+    data) are f(theta, y) at the recorded points, evaluated anew by the numpy
+    right-hand side: a stale stage or a shifted row would differ by O(1)."""
+    op, leak, ports = CASES[name]
+    monkeypatch.setenv("ROTORFLOW_COMPILED", kernel)
+    run = simulate(table, op, leak, ports).solution.run
+    model = build_model(table, op, leak, ports)
+    th, ys, fs = (np.asarray(v, float) for v in (run.trace_theta, run.trace_y, run.trace_f))
+    assert fs.shape == ys.shape
+    scale = np.max(np.abs(np.nan_to_num(fs)), axis=0) + 1e-300  # (as RHS_RTOL's)
+    first = 0
+    for seg, ends in zip(model.segments, run.steps, strict=True):
+        count = 1 + len(ends)
+        if count > 1:
+            sl = slice(first, first + count)
+            ref = model.rhs(th[sl], ys[sl], seg)
+            # round-off as RHS_RTOL, which the cancellation inside dy over a trace's
+            # smaller component scales lifts to ~1.5e-11: 1e-9 still tells a stale or
+            # shifted derivative (off by O(1e-2) of the scale at least)
+            assert np.max(np.abs(fs[sl] - ref) / scale) < 1e-9
+        first += count
+
+
 def test_oil_and_moving_walls_stay_in_numpy(table):
     model = build_model(table, _op(oil_mass_ratio=2.0),
                         Leakage(gap_m=10e-6, model="nozzle", coefficient=0.8), Ports())

@@ -97,7 +97,9 @@ def prepare(table, volume_ratio, suction_close, discharge_open, speed_rpm,
     """Check a ChamberTable and derive everything the model needs from it
     (``early_opening``: how much before the built-in volume ratio's angle the discharge
     port opens, seed 004)."""
-    a = np.asarray(table.angle_rad, dtype=float)
+    # contiguous: the compiled segments take the nodes as a C array (a strided view,
+    # as a table read from disk gives, is another type: numba compiles anew, ~60 s)
+    a = np.ascontiguousarray(table.angle_rad, dtype=float)
     V = np.asarray(table.volume_m3, dtype=float)
     dV = np.asarray(table.dVdangle_m3_rad, dtype=float)
     if a.ndim != 1 or a.size < 4:

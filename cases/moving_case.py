@@ -1,0 +1,346 @@
+"""The OpenFOAM case of the section in motion (:mod:`.moving_section`), run and judged.
+
+Written (:func:`write_case`): the one-cell-thick polyMesh of the start grid
+(:mod:`.polymesh`; patches ``innerRotor``, ``outerRotor`` and ``frontAndBack``, all
+walls), the cellZones of the chambers at the start angle (:mod:`.machine_zones`; the gap
+columns, at most :data:`.moving_section.GAP_COLUMN_RATIO` clearances long, go to the zone
+``gaps`` instead), the faceZones of the sealing lines between chambers, and the key
+frames' displacements ``keyDisplacement`` in their time folders.  rhoPimpleFoam, laminar,
+perfect gas, closed (no ports), at rest at the start.  Walls: ``movingWallVelocity`` on
+the rotors (the mesh's own wall velocity, so no gas crosses them; see
+:func:`.moving_section.wall_velocity_check` for how far its tangential part is from the
+rotors' own), ``slip`` on front and back.
+
+Written every time step (``postProcessing``): the mass in the domain, each chamber's
+volume-averaged pressure, the flow through each sealing faceZone, and the largest Courant
+number in the gap cells and in the whole domain.  :func:`judge` accepts a run
+("completed") that reached its end time with finite pressures and a mass that stayed
+within ``mass_tol`` of its start (closed domain); otherwise the run is "incomplete",
+"inconsistent", "diverged" or "crashed", kept with its log tail and never used.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import shutil
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rotorflow.errors import CaseError, ExternalRunError
+from rotorflow.geometry.sweep import Sweep
+from rotorflow.postprocess.foam_output import function_object_table
+
+from . import foam_case
+from .foam import Step
+from .foam_case import Plan, count_time_steps
+from .foam_dicts import (
+    control_dict,
+    field_value,
+    fv_schemes,
+    thermophysical_properties,
+    turbulence_properties,
+)
+from .foam_files import write_dict, write_field
+from .foam_mesh import judge_check_mesh
+from .machine_case import seal_name, slot_name
+from .machine_zones import chamber_zones, seal_faces, write_zones
+from .moving_section import GAP_COLUMN_RATIO, MovingSection, checked_frames, wall_velocity_check
+from .ogrid_quality import QualityLimits
+from .polymesh import HEADER, build_polymesh, write_mesh
+
+SOLVER = "rhoPimpleFoam"
+FIELD = "keyDisplacement"
+ROTORS = ("innerRotor", "outerRotor")
+ENDS = "frontAndBack"
+
+
+@dataclass(frozen=True)
+class RunControls:
+    """Time stepping and acceptance."""
+
+    #: The largest Courant number (on the flux relative to the moving cells) the time
+    #: step is adjusted to; below 1, as the PIMPLE loop runs in PISO mode (one outer
+    #: corrector).
+    max_courant: float = 0.5
+    #: The time step is at most this fraction of a key-frame interval, so the solver sees
+    #: the mesh's motion change direction at every frame.
+    max_dt_per_frame: float = 0.1
+    #: Mass of the closed domain: relative change allowed over the run (issue 17's 1e-4
+    #: over a revolution).
+    mass_tol: float = 1e-4
+    timeout_s: float | None = None
+
+
+@dataclass(frozen=True)
+class Built:
+    cells: int
+    chambers: tuple  # slot numbers with a zone
+    seals: tuple  # (a, b) slot pairs with a sealing faceZone
+    gap_cells: int
+    duration: float
+    interpolation: dict  # :func:`.moving_section.interpolation_error`
+    wall_velocity: dict  # :func:`.moving_section.wall_velocity_check`
+
+
+def _frame_name(t: float) -> str:
+    return "0" if t == 0.0 else f"{t:.12g}"
+
+
+def _ends(xy, end):
+    return np.full(len(xy), ENDS), {ENDS: "wall"}
+
+
+def _zones(s: MovingSection, grid, mesh) -> tuple[dict, dict, int]:
+    """(cellZones by slot, "gaps" included; sealing faces by slot pair; gap cells) at the
+    start angle: chambers without their gap columns, the gap columns, the faces between
+    chambers (:func:`.machine_zones.seal_faces`)."""
+    pts, faces, owner, nei, patches = mesh
+    zones = chamber_zones(s.pair, [grid, grid], np.array([0.0, s.depth]), s.start,
+                          Sweep("straight", s.depth))
+    p = grid.points
+    length = np.linalg.norm(p[:, -1] - p[:, 0], axis=1)
+    # a cell column spans node columns i and i + 1: a gap column if either is short
+    short = np.minimum(length, np.roll(length, -1)) <= GAP_COLUMN_RATIO * s.gap
+    gap_cell = np.repeat(short, grid.cells_across)  # cell (i, j) is i * rows + j
+    cell_zones = {c: np.flatnonzero((zones.cell_slot == c) & ~gap_cell) for c in zones.slots}
+    cell_zones = {k: v for k, v in cell_zones.items() if v.size}
+    cell_zones["gaps"] = np.flatnonzero(gap_cell)
+    return cell_zones, seal_faces(zones, owner, nei), int(gap_cell.sum())
+
+
+def _write_frames(case_dir: Path, s: MovingSection, grids, patches) -> None:
+    base = grids[0].points.reshape(-1, 2)
+    boundary = "".join(f"    {name} {{ type calculated; }}\n" for name in patches)
+    for t, g in zip(s.frame_times, grids, strict=True):
+        d = g.points.reshape(-1, 2) - base
+        d = np.concatenate([d, d])  # both planes of the slab move alike
+        rows = "\n".join(f"({a:.17g} {b:.17g} 0)" for a, b in d)
+        folder = case_dir / _frame_name(float(t))
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / FIELD).write_text(
+            HEADER.format(cls="pointVectorField", obj=FIELD).replace(
+                'location    "constant/polyMesh";\n', "")
+            + f"\ndimensions [0 1 0 0 0 0 0];\ninternalField nonuniform List<vector> "
+            f"{len(d)}\n(\n{rows}\n);\nboundaryField\n{{\n{boundary}}}\n")
+
+
+def write_case(s: MovingSection, case_dir: Path, controls: RunControls = RunControls()
+               ) -> tuple[Plan, Built]:
+    """Write the case into ``case_dir`` (see the module docstring) and return its plan
+    (checkMesh, the solver) and what the judge needs.  Every key frame and the motion
+    between them are checked before the first file is written: a degenerate frame is a
+    CaseError and nothing is written."""
+    grids, error = checked_frames(s)
+    mesh = build_polymesh([grids[0], grids[0]], np.array([0.0, s.depth]), _ends)
+    by_slot, seals, gap_cells = _zones(s, grids[0], mesh)
+    cell_zones = {k if k == "gaps" else slot_name(k): v for k, v in by_slot.items()}
+    case_dir = Path(case_dir)
+    write_mesh(case_dir, mesh)
+    write_zones(case_dir, cell_zones, {seal_name(a, b): v for (a, b), v in seals.items()})
+    patches = [p[0] for p in mesh[4]]
+    _write_frames(case_dir, s, grids, patches)
+    slots = tuple(k for k in by_slot if k != "gaps")
+    _write_dicts(s, case_dir, controls, [slot_name(c) for c in slots],
+                 [seal_name(a, b) for a, b in seals])
+    cells = int(mesh[2].max()) + 1
+    _write_fields(s, case_dir, cells, cell_zones, patches)
+    plan = Plan(setup=(Step(("checkMesh",), then=functools.partial(
+        judge_check_mesh, expected_cells=cells,
+        max_aspect_ratio=QualityLimits().max_aspect_ratio)),),
+        solve=Step((SOLVER,), timeout_s=controls.timeout_s))
+    return plan, Built(cells, slots, tuple(seals), gap_cells, s.duration, error,
+                       wall_velocity_check(s, grids))
+
+
+def _write_dicts(s: MovingSection, case_dir: Path, c: RunControls, chambers: list,
+                 seals: list) -> None:
+    def fo(kind, region, op, fields, name=None):
+        return field_value(kind, region, op, fields, write_control="timeStep",
+                           write_interval=1, name=name)
+
+    # CourantNo first: function objects run in order, and the Co maxima read its field.
+    functions: dict[str, Any] = {"Co": {"type": "CourantNo", "libs": ["fieldFunctionObjects"],
+                                        "executeControl": "timeStep",
+                                        "writeControl": "none"}}
+    functions["Co_gaps"] = fo("volFieldValue", "cellZone", "max", ["Co"], "gaps")
+    functions["Co_all"] = fo("volFieldValue", "all", "max", ["Co"])
+    functions["mass"] = fo("volFieldValue", "all", "volIntegrate", ["rho"])
+    functions |= {f"p_{z}": fo("volFieldValue", "cellZone", "volAverage", ["p"], z)
+                  for z in chambers}
+    functions |= {f"flow_{z}": fo("surfaceFieldValue", "faceZone", "sum", ["phi"], z)
+                  for z in seals}
+    system, constant = case_dir / "system", case_dir / "constant"
+    frame_dt = s.duration / s.frames
+    write_dict(system / "controlDict", control_dict(
+        SOLVER, start_from="startTime", end_time=s.duration, delta_t=1e-3 * frame_dt,
+        time_step={"adjustTimeStep": True, "maxCo": c.max_courant,
+                   "maxDeltaT": c.max_dt_per_frame * frame_dt},
+        write_control="adjustableRunTime", write_interval=s.duration, purge_write=0,
+        time_precision=12, run_time_modifiable=False, functions=functions))
+    lin_up = ("Gauss", "linearUpwind", "limited")
+    schemes = fv_schemes("Euler", {
+        "div(phi,U)": lin_up, "div(phi,e)": lin_up, "div(phi,K)": ("Gauss", "linear"),
+        "div(phiv,p)": ("Gauss", "linear"), "div(meshPhi,p)": ("Gauss", "linear"),
+        "div(phid,p)": ("Gauss", "upwind")})
+    # the O-grid reaches ~70 deg of non-orthogonality next to the sealing lines: limit
+    # the correction there (as the frozen-angle machine case does)
+    schemes["laplacianSchemes"] = {"default": ("Gauss", "linear", "limited", 0.5)}
+    schemes["snGradSchemes"] = {"default": ("limited", 0.5)}
+    write_dict(system / "fvSchemes", schemes)
+    fine = {"solver": "PBiCGStab", "preconditioner": "DILU", "tolerance": 1e-12,
+            "relTol": 0.0}
+    write_dict(system / "fvSolution", {
+        "solvers": {
+            '"rho.*"': {"solver": "diagonal"},
+            # tight: the closed domain's mass is the run's check, and the pressure
+            # equation's residual is what it is conserved to
+            "p": {**fine, "relTol": 0.01}, "pFinal": fine,
+            '"(U|e)"': {**fine, "relTol": 0.01}, '"(U|e)Final"': fine,
+            # no interior points (every patch prescribes its own): cheap, kept exact
+            '"cellDisplacement.*"': {"solver": "PCG", "preconditioner": "DIC",
+                                      "tolerance": 1e-12, "relTol": 0.0},
+        },
+        "PIMPLE": {"momentumPredictor": True, "nOuterCorrectors": 1, "nCorrectors": 2,
+                   "nNonOrthogonalCorrectors": 1, "transonic": True, "correctPhi": False},
+    })
+    write_dict(constant / "dynamicMeshDict", {
+        "dynamicFvMesh": "dynamicMotionSolverFvMesh",
+        "motionSolverLibs": ['"libfvMotionSolvers.so"'],
+        "solver": "displacementLaplacian",
+        "displacementLaplacianCoeffs": {"diffusivity": "uniform"}})
+    write_dict(constant / "thermophysicalProperties", thermophysical_properties(s.gas))
+    write_dict(constant / "turbulenceProperties", turbulence_properties("laminar"))
+
+
+def _write_fields(s: MovingSection, case_dir: Path, cells: int, cell_zones: dict,
+                  patches: list) -> None:
+    zero = case_dir / "0"
+    p = np.full(cells, s.p0)
+    for slot, value in (s.initial_p or {}).items():
+        if slot_name(slot) in cell_zones:
+            p[cell_zones[slot_name(slot)]] = value
+    grad = {name: {"type": "zeroGradient"} for name in patches}
+    write_field(zero / "p", (1, -1, -2), p, grad)
+    write_field(zero / "T", (0, 0, 0, 1), s.T0, grad)
+    u0 = np.zeros(3)
+    write_field(zero / "U", (0, 1, -1), u0, vector=True, boundary={
+        **{r: {"type": "movingWallVelocity", "value": u0} for r in ROTORS},
+        ENDS: {"type": "slip"}})
+    motion = {"type": "uniformInterpolatedDisplacement", "field": FIELD,
+              "interpolationScheme": "linear", "value": u0}
+    write_field(zero / "pointDisplacement", (0, 1), u0, {name: motion for name in patches},
+                vector=True, point=True)
+
+
+@dataclass(frozen=True)
+class MovingRun:
+    """What a moving-section run produced.  Use only runs with :attr:`ok`."""
+
+    status: str  # completed, incomplete, inconsistent, diverged or crashed
+    message: str
+    cells: int
+    gap_cells: int
+    end_time_s: float
+    time_steps: int
+    run_time_s: float
+    mass_drift: float  # max |m(t) / m(0) - 1|
+    max_gap_courant: float
+    max_courant: float
+    min_dt_s: float
+    chamber_p: dict  # str(slot) -> [p at every step], Pa
+    times_s: list
+    interpolation: dict
+    wall_velocity: dict
+    log_tail: str = ""
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "completed"
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), indent=1, allow_nan=True) + "\n"
+
+    @classmethod
+    def from_json(cls, text: str) -> MovingRun:
+        return cls(**json.loads(text))
+
+
+def _series(case_dir: Path, name: str, kind: str = "volFieldValue") -> np.ndarray:
+    return function_object_table(case_dir, name, f"{kind}.dat")[1][:, :2]
+
+
+def judge(case_dir: Path, built: Built, controls: RunControls, elapsed: float,
+          failure: str) -> MovingRun:
+    """The run's result from its tables (see the module docstring)."""
+    got: dict[str, Any] = {"end_time_s": math.nan, "mass_drift": math.nan,
+                           "max_gap_courant": math.nan, "max_courant": math.nan,
+                           "min_dt_s": math.nan, "chamber_p": {}, "times_s": []}
+    outcome: tuple[str, str] | ExternalRunError
+    try:
+        mass = _series(case_dir, "mass")
+        t = mass[:, 0]
+        pressures = {str(c): _series(case_dir, f"p_{slot_name(c)}")[:, 1].tolist()
+                     for c in built.chambers}
+        dt = np.diff(np.concatenate([[0.0], t]))
+        got = {"end_time_s": float(t[-1]),
+               "mass_drift": float(np.max(np.abs(mass[:, 1] / mass[0, 1] - 1.0))),
+               "max_gap_courant": float(_series(case_dir, "Co_gaps")[:, 1].max()),
+               "max_courant": float(_series(case_dir, "Co_all")[:, 1].max()),
+               "min_dt_s": float(dt.min()), "chamber_p": pressures, "times_s": t.tolist()}
+        values = np.concatenate([mass[:, 1], *map(np.asarray, pressures.values())])
+        if not (np.all(np.isfinite(values)) and values.min() > 0.0):
+            outcome = ("diverged", "non-finite or negative mass or pressure")
+        elif t[-1] < built.duration * (1.0 - 1e-9):
+            outcome = ("incomplete", f"stopped at {t[-1]:.6g} s of {built.duration:.6g} s")
+        elif not got["mass_drift"] <= controls.mass_tol:
+            outcome = ("inconsistent", f"mass of the closed domain drifts by "
+                       f"{got['mass_drift']:.2e}, above {controls.mass_tol:g}")
+        else:
+            outcome = ("completed", "")
+    except ExternalRunError as exc:
+        outcome = exc
+    v = foam_case.verdict(case_dir, SOLVER, failure, outcome, ok="completed")
+    return MovingRun(
+        status=v.status, message=v.message, cells=built.cells, gap_cells=built.gap_cells,
+        time_steps=count_time_steps(case_dir / f"log.{SOLVER}"), run_time_s=elapsed,
+        interpolation=built.interpolation, wall_velocity=built.wall_velocity,
+        log_tail=v.log_tail, **got)
+
+
+def case_key(s: MovingSection, controls: RunControls) -> str:
+    return foam_case.digest({
+        "pair": s.pair.digest(), "gap": s.gap, "spec": asdict(s.spec), "start": s.start,
+        "span": s.span, "frames": s.frames, "omega": s.omega_outer, "depth": s.depth,
+        "p0": s.p0, "T0": s.T0, "gas": asdict(s.gas),
+        "initial_p": sorted((int(k), float(v)) for k, v in (s.initial_p or {}).items()),
+        "controls": asdict(controls)})
+
+
+def run_moving_section(s: MovingSection, case_dir: Path,
+                       controls: RunControls = RunControls(), *, reuse: bool = True,
+                       launch=None) -> MovingRun:
+    """Build, run and judge ``s`` in ``case_dir`` (:func:`.foam_case.run_case`: built in a
+    temporary folder, renamed into place once judged, reused by key; a failed run kept
+    with its log tail).  A grid or motion that cannot be made raises CaseError."""
+    def build(folder: Path):
+        try:
+            return write_case(s, folder, controls)
+        except CaseError:
+            shutil.rmtree(folder, ignore_errors=True)  # nothing half-written stays
+            raise
+
+    def judged(folder, built, values: Mapping[str, Any], elapsed, failure):
+        return judge(folder, built, controls, elapsed, failure)
+
+    return foam_case.run_case(
+        case_dir, case_key(s, controls), build, judged, MovingRun.from_json, reuse=reuse,
+        label="moving section", launch=launch,
+        summary=lambda r: (f"{r.status} {r.message}, {r.cells} cells, {r.time_steps} steps, "
+                           f"mass drift {r.mass_drift:.1e}, gap Courant "
+                           f"{r.max_gap_courant:.3g}, {r.run_time_s:.1f} s"))

@@ -39,36 +39,9 @@ split phases newborn and dying sub-regions interleave near the deep mesh, so whe
 open and sealed footprints overlap there the sealed one wins: the shapes open a little
 late there (never early).
 
-The table's open areas (:func:`open_areas`) do not go through the shapes.  A point that
-the chamber covers in one interval of angles lies in a section after suction closes
-exactly when it lies in the section at closing; outside the region both rotors'
-surfaces pass (:func:`.footprint.crop_region`) every point is covered so (tested), and
-there a section's part in the suction port is the section less the section at
-closing, exactly.  Inside it (the twin screw's lens between the bores, where a groove
-pair passes a point as it is born and again as it dies) the sections after closing are
-swept between the section table's samples (:mod:`.footprint`).  The discharge likewise,
-with the sections before the opening.  The port timing's angles lie between the table's
-nodes (the volume's maximum and its fall to ``V_max / volume_ratio`` on the cubic
-Hermite of the table's volume and its derivative, which the quasi-1D model integrates).
-
-Measured on the 4/6 pairs of bench/bench_twin_screw.py at 24 / 48 / 96 / 192 points
-per period, against the machine of 768 points per period swept 768 times per period,
-the largest error over the table's nodes per largest area:
-
-    pin-cycloid  suction    9.3e-5  8.8e-5  5.7e-5  1.8e-5
-                 discharge  5.4e-4  3.8e-4  7.2e-5  3.0e-5
-    circular     suction    1.8e-4  8.2e-5  6.7e-5  2.8e-5
-                 discharge  1.1e-3  1.6e-3  2.3e-4  1.1e-4
-
-(the sampled ports before, against the same reference: suction 1e-3..4e-2, discharge
-2.6e-2..7.8e-2, not converging).  The suction face's sections lie on the table's
-nodes; the discharge face's (shifted by the wrap) are computed on the section grid and
-interpolated by cubic Hermites, which limits the discharge at 24 and 48 points per
-period: the discharge areas turn sharply where a section's corner passes the sealed
-region's edge (the interpolation alone errs by 5.8e-4 and 1.1e-3 at 24).  The
-circular's discharge at 48 is off by a strip along the sealed region's edge near the
-cusp line, where its sweep at 96 samples per period finds fewer of the male groove's
-births than at 384 (the cause, in footprint_events.py's event finding, not found yet).
+The table's open areas (:func:`open_areas`) do not go through the shapes: they are
+the face sections less the sealed regions, swept (:mod:`.port_areas`, with their measured
+errors).
 """
 
 from __future__ import annotations
@@ -96,8 +69,6 @@ HOLE_FRACTION = 0.01
 #: Scale of the tip hulls' reach [m]: about the boundary spacing of the families' chamber
 #: polygons (0.1 mm).
 SECTION_SPACING = 1e-4
-#: Consecutive sections whose open areas are cut from one crop of the sealed region.
-CROP_WINDOW = 8
 #: Ages (rad) this close are one sample: the grid's angles carry rounding of ~1e-15.
 EPS_AGE = 1e-9
 
@@ -329,119 +300,8 @@ def ports(machine: SweptMachine, timing: PortTiming, cut_discharge: bool = True,
 
 def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray,
                cut_discharge: bool = True, steps: int | None = None):
-    """(suction, discharge): the area through which the chamber is open to each port at
-    every age of ``ages`` (its face section inside the port), m2.
+    """(suction, discharge) areas open to the ports at ``ages``: :func:`.port_areas
+    .open_areas`."""
+    from .port_areas import open_areas as areas
 
-    The chamber's face section is what an end face would offer if the whole plate were
-    open; the port is only part of it, so a chamber opening to the discharge port sees
-    an area that grows from nothing (seed 004's point: the early-opened port is small at
-    first and throttles the gas).  Without ``cut_discharge`` (no axial discharge port)
-    the discharge areas are zero.
-
-    The suction areas are F(a) less the section at closing and, inside the crop region,
-    less the sections after closing swept on the section table's grid (or ``steps`` per
-    lobe period); the discharge likewise (the module docstring).  Zero where the port
-    is closed, up to and from the timing's own angles.
-    """
-    from .footprint import Surfaces, Sweeper, crop_region
-
-    sec, sw = machine.section, machine.sweep
-    life = sec.phi_f - sec.phi_i
-    h = float(sec.psi[1] - sec.psi[0]) if steps is None else machine.period / steps
-    memo = {}
-
-    def section_at(psi):  # each planar section serves both faces
-        key = round(psi / EPS_AGE)
-        if key not in memo:
-            memo[key] = [q for q in _section(machine, psi) if len(q) >= 3]
-        return memo[key]
-
-    sweeper = Sweeper(Surfaces(machine.pair), section_at, *crop_region(machine.pair))
-    ages = np.asarray(ages, dtype=float)
-    sc, do = timing.suction_close, timing.discharge_open
-    lp = _face_areas(section_at, sec, sweeper, ages, (0.0, min(sc, life)), sc,
-                     (sc, min(life, timing.death)), float(sw.scale(0.0)), h)
-    if not cut_discharge:
-        return lp, np.zeros_like(ages)
-    b_open, b_death = do - sw.wrap, timing.death - sw.wrap
-    planar = ages - sw.wrap
-    lo, hi = max(b_open, 0.0), min(b_death, life)
-    grid = h * np.arange(math.floor(lo / h) + 1, math.ceil(hi / h))
-    grid = np.unique(np.concatenate([[lo], grid[(grid > lo + EPS_AGE) & (grid < hi - EPS_AGE)],
-                                     [hi]]))
-    vals = _face_areas(section_at, sec, sweeper, grid, (lo, hi), b_open, (0.0, b_open),
-                       float(sw.scale(sw.length)), h)
-    hp = np.zeros_like(ages)
-    inside = (planar > lo) & (planar < hi)
-    hp[inside] = np.maximum(_hermite(grid, vals, planar[inside]), 0.0)
-    return lp, hp
-
-
-def _face_areas(section_at, sec, sweeper, ages, open_, edge, sealed, scale, h):
-    """Areas of the face sections at planar ``ages`` inside their port: open in
-    ``open_`` (ages, exclusive), sealed over ``sealed`` (swept, ``h`` apart), ``edge``
-    the port's own angle (the sealed window's end on the open side), times ``scale``
-    squared (the face's)."""
-    from manifold3d import CrossSection, FillRule
-
-    out = np.zeros(len(ages))
-    inside = (ages > open_[0] + EPS_AGE) & (ages < open_[1] - EPS_AGE)
-    if not inside.any():
-        return out
-    s0, s1 = sealed
-    parts = []
-    if s1 > s0:
-        window = h * np.arange(math.ceil(s0 / h), math.floor(s1 / h) + 1)
-        window = np.unique(np.concatenate([[s0], window[(window > s0 + EPS_AGE)
-                                                         & (window < s1 - EPS_AGE)], [s1]]))
-        parts.append(sweeper.sweep(sec.phi_i + window))
-    rings = [np.ascontiguousarray(q) for q in section_at(sec.phi_i + edge)]
-    if rings:
-        parts.append(CrossSection(rings, FillRule.Positive))
-    sealed_region = parts[0] if len(parts) == 1 else (parts[0] + parts[1] if parts else None)
-    todo = np.nonzero(inside)[0]
-    for j in range(0, len(todo), CROP_WINDOW):
-        # A few consecutive sections lie in a small part of the sealed region: each is
-        # cut from that part (a Boolean costs as many of its vertices as theirs).
-        window = []
-        for i in todo[j:j + CROP_WINDOW]:
-            rings = [np.ascontiguousarray(q) for q in section_at(sec.phi_i + ages[i])]
-            if rings:
-                window.append((i, CrossSection(rings, FillRule.Positive),
-                               np.min([q.min(0) for q in rings], axis=0),
-                               np.max([q.max(0) for q in rings], axis=0)))
-        if not window:
-            continue
-        crop = sealed_region
-        if crop is not None:
-            lo = np.min([w[2] for w in window], axis=0)
-            hi = np.max([w[3] for w in window], axis=0)
-            pad = 1e-3 * float(np.max(hi - lo))  # off the sections' own edges
-            lo, hi = lo - pad, hi + pad
-            crop = crop ^ CrossSection([np.array([lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]])])
-        for i, f, _, _ in window:
-            out[i] = f.area() if crop is None or crop.is_empty() else (f - crop).area()
-    return out * scale * scale
-
-
-def _hermite(x, y, xq):
-    """Piecewise cubic Hermite through (x, y) with three-point slopes (exact for
-    quadratics), at xq in [x0, x_end].  (Exact slopes, the flux of the rotors' motion
-    through the open region's boundary, were tried: 5.8e-4 became 3.5e-4 on the 4/6
-    pin-cycloid at 24 points per period, for 0.3 s of classifying those boundaries, and
-    Clipper's zigzags where a section runs along the sealed region spoilt some.)"""
-    x, y, xq = (np.asarray(v, dtype=float) for v in (x, y, xq))
-    if len(x) < 3:
-        return np.interp(xq, x, y)
-    hx = np.diff(x)
-    d = np.diff(y) / hx
-    m = np.empty_like(y)
-    m[1:-1] = (hx[1:] * d[:-1] + hx[:-1] * d[1:]) / (hx[:-1] + hx[1:])
-    m[0] = d[0] - hx[0] * (d[1] - d[0]) / (hx[0] + hx[1])
-    m[-1] = d[-1] + hx[-1] * (d[-1] - d[-2]) / (hx[-1] + hx[-2])
-    k = np.clip(np.searchsorted(x, xq) - 1, 0, len(x) - 2)
-    t = (xq - x[k]) / hx[k]
-    h00, h10 = (1 + 2 * t) * (1 - t) ** 2, t * (1 - t) ** 2
-    h01, h11 = t * t * (3 - 2 * t), t * t * (t - 1)
-    out = h00 * y[k] + h10 * hx[k] * m[k] + h01 * y[k + 1] + h11 * hx[k] * m[k + 1]
-    return out
+    return areas(machine, timing, ages, cut_discharge, steps)

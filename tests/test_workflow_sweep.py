@@ -182,7 +182,7 @@ def test_bad_sweep_files_exit_2_with_one_line(tmp_path, text, word):
 
 def test_example_sweep_of_58_points_on_the_local_dask_cluster(tmp_path):
     """Issue 5: >= 50 quasi-1D points over two geometry parameters on the local cluster;
-    the two bad points fail alone (~45 s on 2 cores)."""
+    the two bad points fail alone (51 s on 2 idle cores)."""
     build = tmp_path / "build"
     out = rotorflow("sweep", CASES / "lambda_wrap_sweep.toml", "--build", build)
     assert out.returncode == 0, out.stderr

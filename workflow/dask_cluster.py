@@ -69,10 +69,17 @@ def open_client(spec: ClusterSpec, n_points: int):
         cluster = jobqueue_cluster(spec)
         cluster.scale(jobs=spec.jobs)
     else:
-        cluster = LocalCluster(n_workers=local_workers(spec, n_points),
-                               threads_per_worker=spec.threads_per_worker,
-                               processes=True, dashboard_address=None,
-                               silence_logs=logging.ERROR, env=WORKER_ENV)
+        import dask
+
+        # glibc reads its MALLOC_ variables when the process starts: they must be in the
+        # nanny's pre-spawn environment, which its env argument is not
+        malloc = {f"distributed.nanny.pre-spawn-environ.{k}": v
+                  for k, v in WORKER_ENV.items() if k.startswith("MALLOC_")}
+        with dask.config.set(malloc):
+            cluster = LocalCluster(n_workers=local_workers(spec, n_points),
+                                   threads_per_worker=spec.threads_per_worker,
+                                   processes=True, dashboard_address=None,
+                                   silence_logs=logging.ERROR, env=WORKER_ENV)
     client = Client(cluster)
 
     def close():

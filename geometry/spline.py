@@ -187,10 +187,8 @@ def _tridiagonal(lower, diag, upper, rhs) -> np.ndarray:
     s = 1
     while s < n:
         # Couplings below round-off against their diagonal are dropped, and the passes
-        # stop once none is left: they shrink geometrically, and left to run they turn
-        # subnormal, whose arithmetic is ~10x slower unless a library happened to set
-        # flush-to-zero (measured: a Dask worker's geometry stage took 3 s a point
-        # against 0.2 s in the main process).
+        # stop once none is left: they shrink geometrically, so the spline's rows
+        # decouple after a few passes of the log2(n) (10^5 knots: 39 ms against 91 ms).
         tiny = 1e-17 * np.abs(b)
         a = np.where(np.abs(a) <= tiny, 0.0, a)
         c = np.where(np.abs(c) <= tiny, 0.0, c)

@@ -12,6 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from rotorflow.errors import CaseError
+
+from . import liquid
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_M_DIS, ACC_M_SUC, ACC_W
 
 
@@ -34,30 +37,41 @@ def apply_event(model, kind: str, k: int, theta: float, y: np.ndarray) -> None:
     elif kind == "death":
         m = y[:, k].copy()
         U = y[:, n + k].copy()
-        p, _, _ = model.fluid.props(m / V, U / m)
+        Vg = _gas_volume(model, V, y, k)
+        p, _, _ = model.fluid.props(m / Vg, U / m)
         acc[:, ACC_M_DIS] += m
-        acc[:, ACC_H_DIS] += U + p * V
+        acc[:, ACC_H_DIS] += U + p * Vg
         acc[:, ACC_W] += p * V
         y[:, k] = 0.0
         y[:, n + k] = 0.0
-        if model.oil:
+        if model.oil:  # the liquid leaves with its enthalpy, p V_l with it
             acc[:, c.oil_m_out] += y[:, 2 * n + k]
-            acc[:, c.oil_h_out] += y[:, 3 * n + k]
+            acc[:, c.oil_h_out] += y[:, 3 * n + k] + p * (V - Vg)
             y[:, 2 * n + k] = 0.0
             y[:, 3 * n + k] = 0.0
+    elif kind == "close" and model.op.gas_volume_fraction < 1.0:
+        liquid.fill_at_close(model, k, V, y, acc)
     elif kind == "close" and model.oil:
         mo = model.op.oil_mass_ratio * y[:, k]
-        ho = mo * model.op.oil_cp_J_kgK * model.op.oil_temperature_K
+        ho = 0.0 * mo  # at the injection temperature, the oil's energy datum
         y[:, 2 * n + k] += mo
         y[:, 3 * n + k] += ho
         acc[:, c.oil_m_in] += mo
         acc[:, c.oil_h_in] += ho
     elif kind == "open" and model.ports.model == "ideal":
-        _equalise(model, k, V, y, acc)
+        _equalise(model, k, _gas_volume(model, V, y, k), y, acc)
+
+
+def _gas_volume(model, V, y, k):
+    """The gas's volume in slot k: V less the liquid's (:mod:`.liquid`)."""
+    if not model.inv_rho_liquid:
+        return V
+    return liquid.gas_volume(V, y[:, 2 * model.n + k], model.inv_rho_liquid)
 
 
 def _equalise(model, k, V, y, acc):
-    """Ideal discharge port opening: bring the chamber to the discharge pressure at once."""
+    """Ideal discharge port opening: bring the chamber's gas (volume V) to the discharge
+    pressure at once (the liquid, incompressible, keeps its volume)."""
     n, fl, pd = model.n, model.fluid, model.dis.p
     m = y[:, k].copy()
     U = y[:, n + k].copy()
@@ -81,31 +95,38 @@ def _equalise(model, k, V, y, acc):
 
 
 def initial_state(model) -> np.ndarray:
-    """Start of a period with the no-leakage adiabatic cycle as the guess (slot 0 empty)."""
-    n, geo, fl = model.n, model.geo, model.fluid
+    """Start of a period with the no-leakage adiabatic cycle as the guess (slot 0 empty);
+    a liquid (:mod:`.liquid`) takes its inlet share of the trapped volume and keeps it."""
+    n, geo, fl, op = model.n, model.geo, model.fluid, model.op
     y = np.zeros(model.n_state)
     kap = model.suc.kappa
-    m_trap = model.suc.rho * geo.v_trapped
+    beta = op.gas_volume_fraction if model.inv_rho_liquid else 1.0
+    m_trap = beta * model.suc.rho * geo.v_trapped  # the gas trapped
     for k in range(1, n):
         age = geo.birth + k * geo.period
         if age > geo.death:
             continue
-        V = float(geo.volume(age))
+        V = Vg = float(geo.volume(age))
+        if model.oil and age >= geo.suction_close:
+            ml = model.liquid_ratio * m_trap
+            y[2 * n + k] = ml
+            y[3 * n + k] = 0.0  # at the inlet temperature, the liquid's energy datum
+            Vg = V - ml * model.inv_rho_liquid
+            if Vg <= 0:
+                raise CaseError(f"the liquid fills the chamber before the discharge opens "
+                                f"(hydraulic lock at {age:.3f} rad of its life): lower the "
+                                f"volume ratio or raise the gas volume fraction")
         if age < geo.suction_close:
             rho, p = model.suc.rho, model.suc.p
         elif age < geo.discharge_open:
-            rho = m_trap / V
+            rho = m_trap / Vg
             p = model.suc.p * (rho / model.suc.rho) ** kap
         else:  # any working port keeps the chamber near the discharge pressure
             p = model.dis.p
             rho = model.suc.rho * (p / model.suc.p) ** (1.0 / kap)
         u = fl.u_from_rho_p(rho, p)
-        y[k] = rho * V
-        y[n + k] = rho * V * u
-        if model.oil and age >= geo.suction_close:
-            mo = model.op.oil_mass_ratio * m_trap
-            y[2 * n + k] = mo
-            y[3 * n + k] = mo * model.op.oil_cp_J_kgK * model.op.T_suction_K
+        y[k] = rho * Vg
+        y[n + k] = rho * Vg * u
     return y
 
 

@@ -96,33 +96,40 @@ def balances(F, E, mm, me, mg, p, dV, n, acc_w):
 
 
 def ideal_ports(dy, pdV, V, Vt, rho, u, p, h, pr, pu, c, p_pl, h_pl, mx, mxe, omega,
-                relax, n, gamma):
+                relax, n, gamma, kl=0.0):
     """Add the ideal ports' flows to dy in place (those that hold the open slots c at
     their plenum's pressure p_pl, gas of enthalpy h_pl flowing in); returns them (kg/s).
-    ``gamma`` > 0: a perfect gas of that gamma (then pr, pu are not read)."""
+    ``gamma`` > 0: a perfect gas of that gamma (then pr, pu are not read).  With a liquid
+    of finite density (:mod:`.liquid`): V, Vt the gas's volume and its rate without the
+    port's liquid, kl (B, na) the liquid volume that leaves per kg of gas."""
+    kl = kl[:, c] if np.ndim(kl) else kl
     x, hx = ideal_flow(dy[:, c] * omega, (dy[:, n + c] + pdV[:, c]) * omega, rho[:, c],
                        u[:, c], p[:, c], h[:, c], pr[:, c], pu[:, c], V[..., c], Vt[..., c],
-                       p_pl, h_pl, omega, relax, gamma)
+                       p_pl, h_pl, omega, relax, gamma, kl)
     dy += x @ mx + (x * hx) @ mxe
     return x
 
 
-def ideal_flow(A, Bh, rc, uc, pc, hc, prc, puc, Vc, Vtc, p_pl, h_pl, omega, relax, gamma):
+def ideal_flow(A, Bh, rc, uc, pc, hc, prc, puc, Vc, Vtc, p_pl, h_pl, omega, relax, gamma,
+               kl):
     """The flow x (kg/s) into a slot held at its plenum's pressure p_pl by an ideal port,
     and the enthalpy it carries (arrays or scalars, :func:`.flows.select`): A the other
     mass flows in (kg/s), Bh the other enthalpy flows and heat (W).
 
     The flow makes dp/dt = (p_pl - p) omega / relax (the drift correction): with
-    dm/dt = A + x and dU/dt = Bh + x h_x - p dV/dt, dp/dt = pr drho/dt + pu du/dt."""
+    dm/dt = A + x and dU/dt = Bh + x h_x - p dV/dt, dp/dt = pr drho/dt + pu du/dt.
+    A liquid leaving with the gas (kl m3 per kg of gas out, :mod:`.liquid`) makes the
+    gas's volume rate Vtc - kl x for x < 0: the outflow's denominator gains
+    kl (rho h) (perfect gas) or kl (pr rho + pu p / rho)."""
     tgt = (p_pl - pc) * (omega / relax)
     if gamma > 0.0:
         g1 = gamma - 1.0
         num = Vc * tgt / g1 - Bh + rc * hc * Vtc
-        x = num / flows.select(num > 0.0, h_pl + 0.0 * hc, hc)
+        x = num / flows.select(num > 0.0, h_pl + 0.0 * hc, hc * (1.0 + rc * kl))
     else:
         num = Vc * tgt - prc * (A - rc * Vtc) - puc * (Bh - pc * Vtc - uc * A) / rc
         x_in = num / (prc + puc * (h_pl - uc) / rc)
-        x_out = num / (prc + puc * (hc - uc) / rc)
+        x_out = num / (prc + puc * (hc - uc) / rc + kl * (prc * rc + puc * pc / rc))
         x = flows.select(x_in > 0.0, x_in, np.minimum(x_out, 0.0))
     return x, flows.select(x > 0.0, h_pl + 0.0 * hc, hc)
 
@@ -228,7 +235,7 @@ def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, 
             x_id[i], h_id[i] = ideal_flow(
                 dy[b, k] * omega, (dy[b, n + k] + W[_P, k + 1] * dV[k]) * omega,
                 W[_R, k + 1], W[_U, k + 1], W[_P, k + 1], W[_H, k + 1], W[_PR, k + 1],
-                W[_PU, k + 1], V[k], Vt[k], p_pl[i], h_pl[i], omega, relax, gamma)
+                W[_PU, k + 1], V[k], Vt[k], p_pl[i], h_pl[i], omega, relax, gamma, 0.0)
         for i in range(c.size):
             _add(dy, b, ideal_maps[0], i, x_id[i])
             _add(dy, b, ideal_maps[1], i, x_id[i] * h_id[i])

@@ -45,11 +45,11 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from . import events, flows, kernel
+from . import events, flows, kernel, liquid
 from .chamber import ChamberGeometry
 from .fluids import suction_given
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_Q, ACC_W, AccColumns, Segment, segments
-from .oil import flooded_discharge_T, node_loads, slot_balances
+from .oil import flooded_discharge_T, node_loads, oil_leak_balances, slot_balances
 from .oil import leakage as oil_leakage
 from .paths import resolve
 from .settings import Leakage, Operating, Ports
@@ -94,6 +94,10 @@ class ChamberModel:
     e_ref: float  # p_suction * V_max
     ideal_gas: bool
     inv_omega: float
+    # the liquid (quasi1d/liquid.py): 1 / its density (0: its volume neglected) and its
+    # mass per gas mass in the discharge plenum (the injected or inlet ratio)
+    inv_rho_liquid: float = 0.0
+    liquid_ratio: float = 0.0
     cache: dict = field(default_factory=dict, repr=False, compare=False)
     # the compiled right-hand side ("kernel", set by the cycle solver) and its arguments
     fast: dict = field(default_factory=dict, repr=False, compare=False)
@@ -106,6 +110,14 @@ class ChamberModel:
     @property
     def oil(self) -> bool:
         return self.nv == 4
+
+    @property
+    def liquid_datum_K(self) -> float:
+        """The oil's or liquid's energy is counted from its inlet temperature: Ho =
+        mo c (T_l - datum).  From 0 K its books would carry mo c T, a hundred times the
+        work in a multiphase pump (liquid mass ~100 times the gas's), and the period's
+        energy balance would drown in that offset's round-off."""
+        return self.op.oil_temperature_K
 
     def acc(self, y):
         return y[..., self.nv * self.n:]
@@ -126,7 +138,8 @@ class ChamberModel:
         s[:n] = self.m_ref
         s[n:2 * n] = self.e_ref + self.m_ref * abs(self.suc.u)
         if self.oil:
-            s[2 * n:3 * n] = self.m_ref * max(self.op.oil_mass_ratio, 1e-3)
+            s[2 * n:3 * n] = self.m_ref * max(self.liquid_ratio, 1e-3)
+            # the scale of an absolute temperature: an error of 1e-6 of it is ~0.3 mK
             s[3 * n:4 * n] = s[2 * n:3 * n] * self.op.oil_cp_J_kgK * self.op.oil_temperature_K
         a = s[self.nv * n:]
         a[:] = self.m_ref
@@ -216,7 +229,10 @@ class ChamberModel:
         g = self._geometry(theta, seg)
         iV, area, cou = g[1], g[4], g[5]
         m = y[:, :na]
-        rho = m * iV
+        if self.inv_rho_liquid:
+            rho = m / liquid.gas_volume(g[0], y[:, 2 * n:2 * n + na], self.inv_rho_liquid)
+        else:
+            rho = m * iV
         u = y[:, n:n + na] / m
         p, T, kap = fl.props(rho, u)
         h = u * fl.gamma if self.ideal_gas else u + p / rho
@@ -244,7 +260,15 @@ class ChamberModel:
         F = kernel.mass_flows(fwd, p1, r1, f, area)
         oil_flows = (None, None)
         if seg.oil is not None:  # a homogeneous gas-oil mixture leaks (see .oil)
-            oil_flows = oil_leakage(seg, F, *node_loads(self, y, m, na))
+            X, Y = node_loads(self, y, m, na)
+            mix = None
+            if self.inv_rho_liquid:  # the liquid's volume: the omega method (see .liquid)
+                nl = seg.n_leak
+                Xu = np.where(fwd[:, :nl], X[:, seg.ia[:nl]], X[:, seg.ib[:nl]])
+                kl = k1 if scalar_k else k1[:, :nl]
+                mix = (liquid.mixture_factor(x[:, :nl], kl, r1[:, :nl], Xu, self.inv_rho_liquid),
+                       p1[:, :nl] * self.inv_rho_liquid)
+            oil_flows = oil_leakage(seg, F, X, Y, mix)
         if cou is not None:
             # Couette flow: carried from the older (node ib) into the younger chamber (ia)
             F[:, seg.cou] -= cou * R[:, seg.cou_older]
@@ -295,20 +319,31 @@ class ChamberModel:
         if self.oil:
             mo = y[:, 2 * n:2 * n + na]
             Ho = y[:, 3 * n:3 * n + na]
-            q_oil = (Ho - mo * self.op.oil_cp_J_kgK * T) / self.op.oil_time_constant_s
+            q_oil = (Ho - mo * self.op.oil_cp_J_kgK * (T - self.liquid_datum_K)) \
+                / self.op.oil_time_constant_s
             q = q_oil if q is None else q + q_oil
         if q is not None:
             dy[:, n:n + na] += q * w
+        if Fo is not None:
+            oil_leak_balances(seg, dy, Fo, Eo)
         xs = None
         if seg.ideal.size:
             gamma, pr, pu = (self.fluid.gamma, p, p) if self.ideal_gas else (
                 0.0, *self.fluid.dp(rho, u))
+            kl = 0.0
+            if self.inv_rho_liquid:  # the gas's volume, its rate without the port's liquid
+                inv = self.inv_rho_liquid
+                mo = y[:, 2 * n:2 * n + na]
+                V, Vt = liquid.gas_volume(V, mo, inv), Vt - dy[:, 2 * n:2 * n + na] * (inv / w)
+                kl = mo * inv / m
             xs = kernel.ideal_ports(dy, pdV, V, Vt, rho, u, p, h, pr, pu, seg.ideal,
                                     seg.ideal_p, seg.ideal_h, seg.mx, seg.mxe,
-                                    self.geo.omega_outer, IDEAL_PORT_RELAXATION_RAD, n, gamma)
+                                    self.geo.omega_outer, IDEAL_PORT_RELAXATION_RAD, n, gamma,
+                                    kl)
         if self.oil:
-            slot_balances(self, seg, dy, xs, F, None if Fo is None else (Fo, Eo), y, m,
-                          q_oil, w)
+            slot_balances(self, seg, dy, xs, F, y, m, p, q_oil, w)
+            if self.inv_rho_liquid:
+                liquid.volume_work(dy, p, n, na, self.inv_rho_liquid)
         return dy
 
     def _fused_args(self, seg: Segment):
@@ -361,8 +396,11 @@ class ChamberModel:
         U = y[..., n:2 * n]
         live = (ages <= self.geo.death * (1 + 1e-12)) & (m > 0)
         m[~live] = np.nan
+        Vg = V
+        if self.inv_rho_liquid:
+            Vg = liquid.gas_volume(V, y[..., 2 * n:3 * n], self.inv_rho_liquid)
         with np.errstate(invalid="ignore", divide="ignore"):
-            p, T, _ = self.fluid.props(m / V, U / m)
+            p, T, _ = self.fluid.props(m / Vg, U / m)
         return ages, V, np.asarray(p, float), np.asarray(T, float), m
 
     # -- events and the cycle's states (see .events) -----------------------------------
@@ -415,18 +453,22 @@ def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Port
         Td = fluid.T_ph(op.p_discharge_Pa, h_is)
         if op.fluid.startswith("CoolProp::"):  # (p, h): fixes a two-phase end state too
             dis_h = {"h": h_is}
-    if op.oil_mass_ratio > 0:
-        Td = flooded_discharge_T(fluid, suc, op)
+    ratio = op.oil_mass_ratio
+    if op.gas_volume_fraction < 1.0:
+        ratio = liquid.inlet_mass_ratio(op, suc.rho)
+    if ratio > 0:
+        Td = flooded_discharge_T(fluid, suc, op, ratio)
         dis_h = {}
     dis = plenum(op.p_discharge_Pa, Td, **dis_h)
     if leak.mixture not in Leakage.MIXTURES:
         raise CaseError(f"leakage mixture {leak.mixture!r} is not one of "
                         f"{', '.join(Leakage.MIXTURES)}")
     n = geo.slots
-    nv = 4 if op.oil_mass_ratio > 0 else 2
+    nv = 4 if ratio > 0 else 2
     laws = resolve(geo.paths, leak)
     acc = AccColumns.of(laws, oil_leaks=nv == 4 and leak.mixture == "homogeneous")
     segs = tuple(segments(geo, laws, acc, nv, n, ports, suc, dis))
     return ChamberModel(geo, fluid, op, leak, ports, suc, dis, n, nv, laws, acc, segs,
                         suc.rho * geo.v_max, op.p_suction_Pa * geo.v_max,
-                        hasattr(fluid, "gamma"), 1.0 / geo.omega_outer)
+                        hasattr(fluid, "gamma"), 1.0 / geo.omega_outer,
+                        1.0 / op.liquid_density_kg_m3 if op.liquid_density_kg_m3 else 0.0, ratio)

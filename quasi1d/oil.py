@@ -1,7 +1,8 @@
 """Injected oil in the chamber model: its leakage with the gas, its exit with the discharge
 and the discharge plenum's temperature.
 
-The oil rides in each slot as a mass mo and an enthalpy Ho (state columns 2n.. and 3n..).
+The oil rides in each slot as a mass mo and an enthalpy Ho (state columns 2n.. and 3n..),
+counted from the oil's injection temperature (ChamberModel.liquid_datum_K).
 It enters at suction closing (:mod:`.events`), exchanges heat with the gas, leaves with
 the gas through the discharge port and, with ``[leakage] mixture = "homogeneous"`` (the
 default), through every leakage path with the gas that leaks.
@@ -90,8 +91,8 @@ def node_loads(model, y: np.ndarray, m: np.ndarray, na: int):
     Y = np.zeros((B, na + 2))
     X[:, 1:na + 1] = y[:, 2 * n:2 * n + na] / m
     Y[:, 1:na + 1] = y[:, 3 * n:3 * n + na] / m
-    X[:, -1] = op.oil_mass_ratio
-    Y[:, -1] = op.oil_mass_ratio * op.oil_cp_J_kgK * model.dis.T
+    X[:, -1] = model.liquid_ratio
+    Y[:, -1] = model.liquid_ratio * op.oil_cp_J_kgK * (model.dis.T - model.liquid_datum_K)
     return X, Y
 
 
@@ -109,11 +110,13 @@ def homogeneous_split(F, X_up, Y_up):
     return Fg, Fg * X_up, Fg * Y_up
 
 
-def leakage(seg, F, X, Y):
+def leakage(seg, F, X, Y, mix=None):
     """Split the leakage columns of the signed flows F (B, n_flows) in place into gas
     (F keeps the gas) and return the oil's mass and enthalpy flows (B, n_leak).  The
     upstream node is the one the flow leaves (with moving walls in a calibrated fit the
-    flow may run against the pressure)."""
+    flow may run against the pressure).  ``mix``: a liquid of finite density
+    (:mod:`.liquid`), the mixture's factor on every flow and the liquid's p / rho_l at
+    the upstream node, which its enthalpy flow carries."""
     nl = seg.n_leak
     Fl = F[:, :nl]
     a, b = seg.ia[:nl], seg.ib[:nl]
@@ -121,19 +124,26 @@ def leakage(seg, F, X, Y):
     Xu = np.where(out_of_a, X[:, a], X[:, b])
     Yu = np.where(out_of_a, Y[:, a], Y[:, b])
     F[:, :nl], Fo, Eo = homogeneous_split(Fl, Xu, Yu)
+    if mix is not None:
+        fac, pv = mix
+        F[:, :nl] *= fac
+        Fo, Eo = Fo * fac, Eo * fac
+        Eo += Fo * pv
     return Fo, Eo
 
 
-def slot_balances(model, seg, dy, xs, F, oil_flows, y, m, q_oil, w):
-    """Add the oil's part of dy/dtheta in place: its leakage (``oil_flows``: the oil's
-    mass and enthalpy flows, or None), its heat to the gas (q_oil) and its exit with the
-    gas that flows out through the discharge port (xs: the ideal ports' flows, or None)
-    at the slot's oil per gas mass."""
+def oil_leak_balances(seg, dy, Fo, Eo):
+    """Add the oil's leakage (its mass and enthalpy flows Fo, Eo) to dy/dtheta in place."""
+    dy += Fo @ seg.oil.mm + Eo @ seg.oil.me + np.abs(Fo) @ seg.oil.mg
+
+
+def slot_balances(model, seg, dy, xs, F, y, m, p, q_oil, w):
+    """Add the rest of the oil's part of dy/dtheta in place: its heat to the gas (q_oil)
+    and its exit with the gas that flows out through the discharge port (xs: the ideal
+    ports' flows, or None) at the slot's oil per gas mass, carrying its enthalpy
+    (with a liquid of finite density also p / rho_l, :mod:`.liquid`)."""
     n, na, c = model.n, seg.n_act, model.acc_cols
     acc0 = model.nv * n
-    if oil_flows is not None:
-        Fo, Eo = oil_flows
-        dy += Fo @ seg.oil.mm + Eo @ seg.oil.me + np.abs(Fo) @ seg.oil.mg
     mo = y[:, 2 * n:2 * n + na]
     Ho = y[:, 3 * n:3 * n + na]
     out = np.zeros_like(m)
@@ -143,13 +153,14 @@ def slot_balances(model, seg, dy, xs, F, oil_flows, y, m, q_oil, w):
     if seg.dis_port.size:
         out[:, seg.ia[seg.dis_port] - 1] += np.maximum(F[:, seg.dis_port], 0.0)
     frac = out / m
+    Hx = (Ho + p * mo * model.inv_rho_liquid) * frac
     dy[:, 2 * n:2 * n + na] -= mo * frac * w
-    dy[:, 3 * n:3 * n + na] -= (q_oil + Ho * frac) * w
+    dy[:, 3 * n:3 * n + na] -= (q_oil + Hx) * w
     dy[:, acc0 + c.oil_m_out] += (mo * frac).sum(axis=1) * w
-    dy[:, acc0 + c.oil_h_out] += (Ho * frac).sum(axis=1) * w
+    dy[:, acc0 + c.oil_h_out] += Hx.sum(axis=1) * w
 
 
-def flooded_discharge_T(fluid, suc, op) -> float:
+def flooded_discharge_T(fluid, suc, op, x: float) -> float:
     """The discharge plenum's temperature with oil injected: gas and oil compressed
     together without losses, in thermal equilibrium from the moment they mix.
 
@@ -159,7 +170,7 @@ def flooded_discharge_T(fluid, suc, op) -> float:
     T2 = T1 (p2 / p1)^(R / (cp + x c_oil)), T1 the adiabatic mixing temperature of
     gas at suction and oil at injection.
     """
-    T1g, x, co = op.T_suction_K, op.oil_mass_ratio, op.oil_cp_J_kgK
+    T1g, co = op.T_suction_K, op.oil_cp_J_kgK
     h_lo = fluid.state_pT(op.p_suction_Pa, T1g - 0.5)[2]
     h_hi = fluid.state_pT(op.p_suction_Pa, T1g + 0.5)[2]
     cp = float(h_hi - h_lo)

@@ -112,5 +112,7 @@ def _mixture_T(model, a, T_gas):
     h_hi = fl.state_pT(op.p_discharge_Pa, T_gas + 0.5)[2]
     cg = float(h_hi - h_lo) * a[ACC_M_DIS]
     co = op.oil_cp_J_kgK * a[c.oil_m_out]
-    T_oil = a[c.oil_h_out] / co
+    # the delivered liquid's enthalpy, less its p v (at the discharge pressure), over c
+    T_oil = model.liquid_datum_K + (a[c.oil_h_out] - model.op.p_discharge_Pa
+                                    * model.inv_rho_liquid * a[c.oil_m_out]) / co
     return float((cg * T_gas + co * T_oil) / (cg + co))

@@ -64,6 +64,34 @@ def check_fluid(name: str, where: str = "the case") -> str:
     )
 
 
+def _liquid(d: dict, s: str, where: str) -> dict:
+    """The liquid keys of [operating] (see Operating): a gas volume fraction in (0, 1]
+    (the liquid fraction 1 - beta in [0, 1)), below 1 only with the liquid's density and
+    not beside injected oil; liquid_cp_J_kgK names the liquid's heat capacity (the oil's
+    field: one liquid per case)."""
+    out = {}
+    if "liquid_density_kg_m3" in d:
+        out["liquid_density_kg_m3"] = _number(d, "liquid_density_kg_m3", s, where, positive=True)
+    beta = _number(d, "gas_volume_fraction", s, where, 1.0, positive=True)
+    if beta > 1.0:
+        raise CaseError(f"key 'gas_volume_fraction' in [{s}] of {where} must be in (0, 1] "
+                        f"(the liquid fraction 1 - beta in [0, 1)), got {beta}")
+    if beta < 1.0:
+        if "liquid_density_kg_m3" not in d:
+            raise CaseError(f"gas_volume_fraction < 1 in [{s}] of {where} needs the liquid's "
+                            "liquid_density_kg_m3")
+        if d.get("oil_mass_ratio", 0.0):
+            raise CaseError(f"give gas_volume_fraction or oil_mass_ratio in [{s}] of {where}, "
+                            "not both (one liquid per case)")
+    out["gas_volume_fraction"] = beta
+    if "liquid_cp_J_kgK" in d:
+        if "oil_cp_J_kgK" in d:
+            raise CaseError(f"give liquid_cp_J_kgK or oil_cp_J_kgK in [{s}] of {where}, "
+                            "not both (one liquid per case)")
+        out["cp"] = _number(d, "liquid_cp_J_kgK", s, where, positive=True)
+    return out
+
+
 @dataclass(frozen=True)
 class Operating:
     """Operating point; pressures in Pa, temperatures in K, speed in rpm of the driven rotor.
@@ -97,6 +125,11 @@ class Operating:
     # h ~ 1.4e4 W/(m2 K) (a spray); 50 um droplets in still gas take 14 ms.
     oil_time_constant_s: float = 1.0e-3
     suction_quality: float | None = None  # wet suction's vapour mass fraction (CoolProp only)
+    # A liquid that fills chamber volume (multiphase pumps, quasi1d/liquid.py): its density
+    # (None: the oil's volume is neglected) and the inlet's gas volume fraction (1: gas only;
+    # below 1 the liquid, of heat capacity oil_cp_J_kgK, is drawn in with the gas).
+    liquid_density_kg_m3: float | None = None
+    gas_volume_fraction: float = 1.0
 
     KEYS = (
         "p_suction_bar", "p_discharge_bar", "T_suction_K", "speed_rpm", "fluid",
@@ -104,6 +137,7 @@ class Operating:
         "discharge_early_opening_deg",
         "heat_transfer_W_m2K", "heat_capacity", "molar_mass_g_mol", "cp_J_kgK",
         "oil_mass_ratio", "T_oil_K", "oil_cp_J_kgK", "oil_time_constant_ms", "suction_quality",
+        "liquid_density_kg_m3", "gas_volume_fraction", "liquid_cp_J_kgK",
         "driven",  # a geometry key that the case file keeps in [operating]; not used here
         "discharge_port",  # a geometry key too: the chamber table's area_hp holds the ports
     )
@@ -184,6 +218,7 @@ class Operating:
         if perfect and heat_capacity == "temperature":
             raise CaseError(f"key '{perfect[0]}' in [{s}] of {where} sets a constant-cp gas; "
                             "heat_capacity = \"temperature\" uses dry air's cp(T)")
+        liquid = _liquid(d, s, where)
         return cls(
             p_suction_Pa=ps * BAR,
             p_discharge_Pa=pd * BAR,
@@ -202,11 +237,13 @@ class Operating:
             cp_J_kgK=_number(d, "cp_J_kgK", s, where, AIR_CP_J_KGK, positive=True),
             oil_mass_ratio=_number(d, "oil_mass_ratio", s, where, 0.0, nonnegative=True),
             T_oil_K=None if Toil is None else _number(d, "T_oil_K", s, where, positive=True),
-            oil_cp_J_kgK=_number(d, "oil_cp_J_kgK", s, where, 1900.0, positive=True),
+            oil_cp_J_kgK=liquid.pop("cp", None) or _number(d, "oil_cp_J_kgK", s, where, 1900.0,
+                                                           positive=True),
             oil_time_constant_s=1e-3 * _number(d, "oil_time_constant_ms", s, where, 1.0,
                                                positive=True),
             suction_quality=_number(d, "suction_quality", s, where, positive=True)
             if "suction_quality" in d else None,  # checked by fluids.make_fluid
+            **liquid,
         )
 
     def check_ideal_gas(self, where: str = "the case") -> None:

@@ -81,7 +81,8 @@ def upstream_oil(model, seg, y, F):
             X.append(0.0), ho.append(0.0), kind.append(0)
         elif node == na + 1:
             X.append(op.oil_mass_ratio)
-            ho.append(op.oil_cp_J_kgK * model.dis.T)
+            # (the oil's energy counts from its injection temperature)
+            ho.append(op.oil_cp_J_kgK * (model.dis.T - model.liquid_datum_K))
             kind.append(2)
         else:
             k = node - 1

@@ -1,0 +1,133 @@
+"""A liquid that takes up chamber volume: the multiphase pump's gas-liquid mixture
+(seed 003: "sludge flow ... incompressible ... interacting with the gas flow only through
+internal heat transfer").
+
+The liquid rides in the oil's state columns (mass mo and internal energy Ho per slot,
+:mod:`.oil`); with ``liquid_density_kg_m3`` given it also fills volume mo / rho_l, so
+the gas lives in V_g = V - mo / rho_l.  Without a density the liquid's volume is
+neglected (the injected oil of a compressor, :mod:`.oil`), and everything here reduces
+to what :mod:`.oil` does.
+
+Energy, the liquid incompressible (u_l = c T_l, its enthalpy u_l + p / rho_l):
+
+    gas     dU  = sum m_g h_g - p dV_g + Q_wall + Q_liquid,   dV_g = dV - dmo / rho_l
+    liquid  dHo = sum m_l (u_l + p_up / rho_l) - p dmo / rho_l - Q_liquid
+
+so the two together take -p dV, the shaft's work on the whole chamber (the liquid's
+push-out work (p_d - p_s) V_l is in the indicated power), and a liquid flowing from
+p_up into a chamber at p dissipates (p_up - p) / rho_l per kg into the liquid.
+
+Leakage: the gap passes the homogeneous mixture (no slip, :mod:`.oil`), its flux by
+Leung's omega method (J. C. Leung, "A generalized correlation for one-component
+homogeneous equilibrium flashing choked flow", AIChE J. 32 (1986) 1743; the frozen,
+non-flashing form, as API 520 Part I Annex C gives it): the mixture's specific volume
+v = v_1 [omega (p_1 / p - 1) + 1] with omega = alpha_1 / kappa, alpha_1 the upstream
+gas volume fraction, so
+
+    G / sqrt(p_1 rho_m1) = G*(eta, omega)
+                         = sqrt(-2 [omega ln eta + (omega - 1)(1 - eta)]) / (omega (1 / eta - 1) + 1),
+
+choked below the critical ratio eta_c(omega) (G* = eta_c / sqrt(omega)).  omega = 0 is a
+liquid, G* = sqrt(2 (1 - eta)): the orifice's A sqrt(2 rho_l dp).  Each path keeps its own
+law (nozzle, Fanno, rarefied, calibrated) for the gas alone, f(x); the mixture's is that
+law times G*(x, omega) / G*(x, 1 / kappa): the law's departure from an ideal gas nozzle
+(friction, rarefaction) is carried over to the mixture.  The gas is kappa's gas in the
+gap (as in :mod:`.oil`: the liquid's heat capacity would pull the expansion towards the
+isothermal one, omega = alpha_1); not modelled: slip, a film of liquid held in the gap by
+the rotors' centrifugal field, flashing of a volatile liquid.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .network import ACC_H_SUC, ACC_M_SUC
+
+# eta_c(omega) of the omega method, tabulated once in log omega: the root of
+# eta^2 + (omega^2 - 2 omega)(1 - eta)^2 + 2 omega^2 ln eta + 2 omega^2 (1 - eta) = 0
+# (Leung 1986, Eq. 19), positive at eta -> 1 and -inf at eta -> 0.
+_LOG_OMEGA = np.linspace(np.log(1e-8), np.log(1e4), 601)
+
+
+def _critical_ratio(omega: np.ndarray) -> np.ndarray:
+    lo, hi = np.full_like(omega, 1e-12), np.ones_like(omega)
+    w2 = omega * omega
+    for _ in range(60):
+        eta = 0.5 * (lo + hi)
+        f = eta * eta + (w2 - 2 * omega) * (1 - eta) ** 2 + 2 * w2 * np.log(eta) \
+            + 2 * w2 * (1 - eta)
+        neg = f < 0.0
+        lo = np.where(neg, eta, lo)
+        hi = np.where(neg, hi, eta)
+    return 0.5 * (lo + hi)
+
+
+_ETA_C = _critical_ratio(np.exp(_LOG_OMEGA))
+
+
+def critical_ratio(omega):
+    """eta_c(omega): the pressure ratio below which the omega method's flux chokes."""
+    return np.interp(np.log(np.maximum(omega, 1e-300)), _LOG_OMEGA, _ETA_C)
+
+
+def omega_flux(eta, omega):
+    """G*(eta, omega) = G / sqrt(p_1 rho_1) of the omega method, choked below eta_c."""
+    e = np.maximum(eta, critical_ratio(omega))
+    num = -2.0 * (omega * np.log(e) + (omega - 1.0) * (1.0 - e))
+    return np.sqrt(np.maximum(num, 0.0)) / (omega * (1.0 / e - 1.0) + 1.0)
+
+
+def mixture_factor(x, kappa, rho_g, X, inv_rho_l):
+    """What the mixture's gas flow is as a share of the gas-only flow F of the same gap
+    at the same upstream pressure and gas density, times sqrt(1 + X) (:mod:`.oil`'s
+    homogeneous split has divided by it already): sqrt(alpha) G*(x, alpha / kappa) /
+    G*(x, 1 / kappa).  x = p_low / p_high, X = liquid mass per gas mass upstream."""
+    alpha = 1.0 / (1.0 + np.maximum(X, 0.0) * rho_g * inv_rho_l)
+    ik = 1.0 / kappa
+    g0 = omega_flux(x, ik)
+    ratio = np.where(g0 > 0.0, omega_flux(x, alpha * ik) / np.where(g0 > 0.0, g0, 1.0), 1.0)
+    return np.sqrt(alpha) * ratio
+
+
+def gas_volume(V, mo, inv_rho_l):
+    """The gas's volume: the chamber's less the liquid's."""
+    return V - mo * inv_rho_l
+
+
+def volume_work(dy, p, n: int, na: int, inv_rho_l: float) -> None:
+    """Move the work p dV_l between the liquid and the gas in place: the gas, which took
+    -p dV, gets back p dmo / rho_l; the liquid gives it (see the module's balance)."""
+    pdVl = p * dy[:, 2 * n:2 * n + na] * inv_rho_l
+    dy[:, n:n + na] += pdVl
+    dy[:, 3 * n:3 * n + na] -= pdVl
+
+
+def fill_at_close(model, k: int, V: float, y: np.ndarray, acc: np.ndarray) -> None:
+    """Suction close with a gas volume fraction beta < 1 at the inlet: the mixture drawn
+    in fills the chamber's gas space V_g with gas (beta V_g, at its state) and liquid
+    ((1 - beta) V_g at the inlet temperature).  The suction port held the gas at the
+    plenum's pressure, so the liquid is booked as entering with its enthalpy
+    u_l + p / rho_l and the gas it displaces as never drawn in (mass and enthalpy
+    taken back from the suction's books); the chamber's work is unchanged: the volume
+    was swept at the same pressure."""
+    n, c, op, inv = model.n, model.acc_cols, model.op, model.inv_rho_liquid
+    beta = op.gas_volume_fraction
+    m, U, mo = y[:, k].copy(), y[:, n + k].copy(), y[:, 2 * n + k]
+    Vg = gas_volume(V, mo, inv)
+    p = model.fluid.props(m / Vg, U / m)[0]
+    y[:, k] = beta * m
+    y[:, n + k] = beta * U
+    acc[:, ACC_M_SUC] -= (1.0 - beta) * m
+    acc[:, ACC_H_SUC] -= (1.0 - beta) * (U + p * Vg)
+    ml = (1.0 - beta) * Vg / inv
+    hl = 0.0 * ml  # at the inlet temperature, the liquid's energy datum
+    y[:, 2 * n + k] += ml
+    y[:, 3 * n + k] += hl
+    acc[:, c.oil_m_in] += ml
+    acc[:, c.oil_h_in] += hl + p * (1.0 - beta) * Vg
+
+
+def inlet_mass_ratio(op, rho_g_suction: float) -> float:
+    """Liquid mass per gas mass of the inlet mixture: rho_l (1 - beta) / (rho_g beta)."""
+    beta = op.gas_volume_fraction
+    return op.liquid_density_kg_m3 * (1.0 - beta) / (rho_g_suction * beta)

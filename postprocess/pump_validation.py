@@ -59,8 +59,14 @@ def read_table(path: Path = REFERENCE) -> list[Row]:
 
 def predict(raw: dict, table, row: Row, where: str = str(EXAMPLE)) -> dict:
     """The model at the row's suction pressure and speed, all else as in the case."""
+    return point(raw, table, where, p_suction_bar=row.p_suction_bar, speed_rpm=row.speed_rpm)
+
+
+def point(raw: dict, table, where: str, **operating) -> dict:
+    """The model's figures of the case with its [operating] keys updated by ``operating``
+    (on the chamber table ``table``, built once for every row of a pump's table)."""
     raw = copy.deepcopy(raw)
-    raw["operating"].update(p_suction_bar=row.p_suction_bar, speed_rpm=row.speed_rpm)
+    raw["operating"].update(operating)
     op, leak, ports, numerics, mech = case_settings(raw, where)
     t0 = time.process_time()
     fig = simulate(table, op, leak, ports, numerics, mech).figures
@@ -68,6 +74,8 @@ def predict(raw: dict, table, row: Row, where: str = str(EXAMPLE)) -> dict:
             "indicated_kW": fig["indicated_power_W"] / 1e3,
             "flow_m3_min": fig["suction_volume_flow_L_min"] / 1e3,
             "T_discharge_K": fig["discharge_temperature_K"], "converged": fig["converged"],
+            "mass_balance_error": fig["mass_balance_error"],
+            "energy_balance_error": fig["energy_balance_error"],
             "cpu_s": time.process_time() - t0}
 
 

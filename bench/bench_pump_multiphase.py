@@ -16,7 +16,7 @@ from pathlib import Path
 
 from rotorflow.postprocess import pump_multiphase as pm
 
-from .bench_pump_vacuum import pump_table
+from .bench_pump_vacuum import pump_table, record
 
 
 def _rows(want: str | None) -> list[pm.Row]:
@@ -32,19 +32,7 @@ def run(results_dir: Path, rows: list[pm.Row] | None = None,
     """Every row (or ``rows``), written to pump_multiphase.csv with the CPU time."""
     t0, c0 = time.perf_counter(), time.process_time()
     res = pm.run(rows or pm.read_table(), *pump_table(case), str(case))
-    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    results_dir.mkdir(parents=True, exist_ok=True)
-    with open(results_dir / "pump_multiphase.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(res[0]))
-        w.writeheader()
-        w.writerows(res)
-    predicted = [r for r in res if r["predicted"]]
-    return [{"rows": len(res), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
-             "max_eta_v_error": max(abs(r["eta_v_error"]) for r in predicted),
-             "max_power_error": max(abs(r["power_error"]) for r in predicted),
-             "eta_v_met": sum(r["eta_v_ok"] for r in predicted),
-             "power_met": sum(r["power_ok"] for r in predicted),
-             "predicted": len(predicted), **pm.trends(res)}]
+    return [{**record(results_dir / "pump_multiphase.csv", res, t0, c0), **pm.trends(res)}]
 
 
 def main(argv: list[str] | None = None) -> None:

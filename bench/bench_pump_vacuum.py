@@ -39,20 +39,26 @@ def run(results_dir: Path, rows: list[pv.Row] | None = None,
     """Every row (or ``rows``), written to pump_vacuum.csv with the wall and CPU time."""
     t0, c0 = time.perf_counter(), time.process_time()
     res = pv.run(rows or pv.read_table(), *pump_table(case), str(case))
+    summary = record(results_dir / "pump_vacuum.csv", res, t0, c0)
+    return [{**summary, "eta_v_rising": pv.rising([r["eta_v_model"] for r in res])}]
+
+
+def record(path: Path, res: list[dict], t0: float, c0: float) -> dict:
+    """Write a pump table's rows to ``path``; the summary of their errors and targets
+    with the wall and CPU time since t0, c0."""
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    results_dir.mkdir(parents=True, exist_ok=True)
-    with open(results_dir / "pump_vacuum.csv", "w", newline="") as f:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(res[0]))
         w.writeheader()
         w.writerows(res)
     predicted = [r for r in res if r["predicted"]]
-    return [{"rows": len(res), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
-             "max_eta_v_error": max(abs(r["eta_v_error"]) for r in predicted),
-             "max_power_error": max(abs(r["power_error"]) for r in predicted),
-             "eta_v_met": sum(r["eta_v_ok"] for r in predicted),
-             "power_met": sum(r["power_ok"] for r in predicted),
-             "predicted": len(predicted),
-             "eta_v_rising": pv.rising([r["eta_v_model"] for r in res])}]
+    return {"rows": len(res), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
+            "max_eta_v_error": max(abs(r["eta_v_error"]) for r in predicted),
+            "max_power_error": max(abs(r["power_error"]) for r in predicted),
+            "eta_v_met": sum(r["eta_v_ok"] for r in predicted),
+            "power_met": sum(r["power_ok"] for r in predicted),
+            "predicted": len(predicted)}
 
 
 def main(argv: list[str] | None = None) -> None:

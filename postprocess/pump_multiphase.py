@@ -76,8 +76,8 @@ def predict(raw: dict, table, row: Row, where: str = str(EXAMPLE)) -> dict:
 
 def fit_gas_volume_fraction(raw: dict, table, row: Row, where: str = str(EXAMPLE)) -> float:
     """The inlet gas volume fraction that gives the row's measured eta_v (the example's
-    one fitted value): eta_v rises with it, so Brent's method on (0.6, 0.999) (at vi = 2 a fraction of
-    0.5 locks the chamber with liquid); 3 figures."""
+    one fitted value): eta_v rises with it, so Brent's method on (0.6, 0.999) (at vi = 2
+    a fraction of 0.5 locks the chamber with liquid); 3 figures."""
     def miss(beta: float) -> float:
         r = copy.deepcopy(raw)
         r["operating"]["gas_volume_fraction"] = beta
@@ -110,9 +110,9 @@ def trends(res: list[dict]) -> dict:
     eta = {(r["p_discharge_bar"], r["speed_rpm"]): r["eta_v_model"] for r in res}
     ps = sorted({k[0] for k in eta})
     ns = sorted({k[1] for k in eta})
-    speed = all(eta[(p, a)] < eta[(p, b)] for p in ps for a, b in zip(ns, ns[1:])
+    speed = all(eta[(p, a)] < eta[(p, b)] for p in ps for a, b in zip(ns, ns[1:], strict=False)
                 if (p, a) in eta and (p, b) in eta)
-    pressure = all(eta[(a, n)] > eta[(b, n)] for n in ns for a, b in zip(ps, ps[1:])
+    pressure = all(eta[(a, n)] > eta[(b, n)] for n in ns for a, b in zip(ps, ps[1:], strict=False)
                    if (a, n) in eta and (b, n) in eta)
     return {"eta_v_rises_with_speed": speed, "eta_v_falls_with_pressure": pressure}
 
@@ -132,6 +132,7 @@ def format_report(res: list[dict]) -> str:
         lines.append(f"{r['p_discharge_bar']:7.0f} {r['speed_rpm']:5.0f} "
                      f"{r['eta_v_reference']:9.3f} {r['eta_v_model']:6.3f} "
                      f"{r['eta_v_error']:+7.3f} {r['power_kW_table']:8.2f} "
-                     f"{r['power_kW_model']:6.2f} {100 * r['power_error']:+6.1f}  {role}{ref}{flag}")
+                     f"{r['power_kW_model']:6.2f} {100 * r['power_error']:+6.1f}  "
+                     f"{role}{ref}{flag}")
     lines.append(str(trends(res)))
     return "\n".join(lines)

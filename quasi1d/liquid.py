@@ -25,7 +25,7 @@ v = v_1 [omega (p_1 / p - 1) + 1] with omega = alpha_1 / kappa, alpha_1 the upst
 gas volume fraction, so
 
     G / sqrt(p_1 rho_m1) = G*(eta, omega)
-                         = sqrt(-2 [omega ln eta + (omega - 1)(1 - eta)]) / (omega (1 / eta - 1) + 1),
+        = sqrt(-2 [omega ln eta + (omega - 1)(1 - eta)]) / (omega (1 / eta - 1) + 1),
 
 choked below the critical ratio eta_c(omega) (G* = eta_c / sqrt(omega)).  omega = 0 is a
 liquid, G* = sqrt(2 (1 - eta)): the orifice's A sqrt(2 rho_l dp).  Each path keeps its own

@@ -20,7 +20,6 @@ from rotorflow.quasi1d import Operating, flows, liquid
 from rotorflow.quasi1d.settings import AIR_MOLAR_MASS_G_MOL
 from rotorflow.workflow.case import case_from_raw, load_toml
 
-
 # --- the omega method --------------------------------------------------------------------
 
 def test_omega_zero_is_the_incompressible_orifice():

@@ -46,7 +46,8 @@ class GrooveAges:
         both sides) belongs to the dying chamber while it shrinks and to the newborn one
         while it grows (``rate``: its area's rate per male angle, which is its torques'
         power): so it changes hands at its smallest, and the chambers' areas stay
-        continuous but for that carry-over.
+        continuous but for that carry-over.  None for such a pocket when ``rate`` is
+        None (not known: a polygons-only cut).
         """
         pair = self.pair
         n = pair.gearing.lobes_male if rotor == MALE else pair.gearing.lobes_female
@@ -83,6 +84,8 @@ class GrooveAges:
             age = theta
         elif side == "bottom":
             age = theta + TWO_PI
+        elif rate is None:
+            return None  # (a polygons-only cut: the caller cuts in full)
         elif abs(rate) > POCKET_RATE * self.C ** 2:
             age = theta if rate > 0.0 else theta + TWO_PI
         else:

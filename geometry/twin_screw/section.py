@@ -114,17 +114,22 @@ def _scan(pair, points_per_period):
     return psis, [_cut(pair, float(p)) for p in psis]
 
 
-def _cut(pair, residue: float):
+def _cut(pair, residue: float, polygons_only: bool = False):
     """The section at ``residue`` (an angle in the period from -beta_0), cut once per
     pair: the table, the female parts' shift and the ports' chamber polygons ask for
-    many of the same angles."""
+    many of the same angles.  A polygons-only cut (:meth:`.regions.SectionCutter.cut`)
+    serves polygons-only requests alone."""
     key = round(residue / RESIDUE_TOL)
     cuts = pair.cut_memo
-    if key not in cuts:
-        if len(cuts) >= CUT_MEMO:
-            cuts.pop(next(iter(cuts)))
-        cuts[key] = pair.cutter.cut(residue)
-    return cuts[key]
+    if key in cuts:
+        return cuts[key]
+    if polygons_only and (key, "polygons") in cuts:
+        return cuts[(key, "polygons")]
+    if len(cuts) >= CUT_MEMO:
+        cuts.pop(next(iter(cuts)))
+    parts = pair.cutter.cut(residue, polygons_only)
+    cuts[(key, "polygons") if polygons_only else key] = parts
+    return parts
 
 
 def chamber_index(pair, part, psi, shift) -> int:
@@ -381,7 +386,7 @@ def chamber_polygons(pair, phi: float, contacts: list | None = None) -> list[np.
     residue = float(phi - q * period)
     shift = pair.female_shift
     out = []
-    for p in _cut(pair, residue):
+    for p in _cut(pair, residue, polygons_only=contacts is None):
         if chamber_index(pair, p, residue, shift) == q:
             out.extend(p.polygons)
             if contacts is not None:

@@ -161,6 +161,7 @@ class SectionCutter(GrooveAges, Boundaries):
 
     @cached_property
     def _bores(self):
+        """The rings (Clipper units) of the union of both bores."""
         from manifold3d import CrossSection
 
         rings = []
@@ -169,7 +170,7 @@ class SectionCutter(GrooveAges, Boundaries):
             a = np.linspace(0.0, TWO_PI, n, endpoint=False)
             rings.append(CrossSection([np.ascontiguousarray(
                 (o + r * np.c_[np.cos(a), np.sin(a)]) * self.k)]))
-        return rings[0] + rings[1]
+        return [np.ascontiguousarray(q) for q in (rings[0] + rings[1]).to_polygons()]
 
     @cached_property
     def _halves(self):
@@ -200,24 +201,24 @@ class SectionCutter(GrooveAges, Boundaries):
         its polygons, rotor, groove and age, and no loads, tips or contacts unless its
         age needs them (:meth:`_light_parts`): the ports' off-grid sections need only
         which chamber a polygon is, and 7 of the cut's 12 ms go to the rest."""
-        from manifold3d import CrossSection, OpType
+        from manifold3d import CrossSection, FillRule
 
-        polys = []
-        for r in (MALE, FEMALE):
-            p = self._rotor_data[r].polygon
-            polys.append(CrossSection([np.ascontiguousarray(self.rotor_at(r, p, psi) * self.k)]))
-        # (one Clipper sweep for both rotors: 1.5 ms against 2.3 for two)
-        fluid = CrossSection.batch_boolean([self._bores, *polys], OpType.Subtract)
+        rings = [np.ascontiguousarray(self.rotor_at(r, self._rotor_data[r].polygon, psi)
+                                      * self.k) for r in (MALE, FEMALE)]
+        # The bores' ring, both rotors' reversed: winding +1 in the fluid alone (one
+        # Clipper sweep, 1.45 ms against 2.05 for building the rotors and subtracting).
+        fluid = CrossSection([*self._bores, *(q[::-1].copy() for q in rings)],
+                             FillRule.Positive)
         self._runs = []
         parts, pending = self._pieces(fluid, psi)
         if polygons_only:
-            light = self._light_parts(pending, psi, polys)
+            light = self._light_parts(pending, psi, rings)
             return [p for p in (light[p] if isinstance(p, int) else p for p in parts)
                     if p is not None]
         walked = self._parts(pending, psi)
         parts = [walked[p] if isinstance(p, int) else p for p in parts]
         parts = [p for p in parts if p is not None]
-        self._contacts(psi, (polys[0] ^ polys[1]).decompose())
+        self._contacts(psi, _overlap(rings).decompose())
         self._loads()
         for part in parts:
             if part.centroid is not None:
@@ -258,7 +259,7 @@ class SectionCutter(GrooveAges, Boundaries):
                     pending.append((rotor, sub, side, number))
         return parts, pending
 
-    def _light_parts(self, subs, psi, polys) -> list[Part | None]:
+    def _light_parts(self, subs, psi, rings) -> list[Part | None]:
         """:meth:`_parts` with polygons, groove and age only.  A pocket whose age needs
         its area rate is walked with the contacts of the lenses within LENS_MATCH of it
         (a farther lens's ends are no candidates for its corners): its loads come out
@@ -281,7 +282,7 @@ class SectionCutter(GrooveAges, Boundaries):
             pts = np.concatenate([q for part in walked for q in part.polygons])
             reach = LENS_MATCH * self.C
             lo, hi = pts.min(0) - reach, pts.max(0) + reach
-            lenses = [x for x in (polys[0] ^ polys[1]).decompose()
+            lenses = [x for x in _overlap(rings).decompose()
                       if _meets(np.asarray(x.bounds()).reshape(2, 2) / self.k, lo, hi)]
             self._contacts(psi, lenses)
             self._loads()
@@ -336,7 +337,9 @@ class SectionCutter(GrooveAges, Boundaries):
             return Part(rotor, groove, age, ref.area, force, np.zeros(2), ref.perimeter.copy(),
                         tips=[(rotor, (groove + 1) % n, a), (rotor, groove, b)], side="",
                         polygons=rings)
-        near = np.min(np.linalg.norm(rings[0][None, :, :] - tips[:, None, :], axis=-1), 1)
+        # (squared distances: the order is the distances')
+        near = np.min(np.einsum("tvk,tvk->tv", *(rings[0][None, :, :] - tips[:, None, :],) * 2),
+                      1)
         pair = sorted(np.argsort(near)[:2])  # one tip only on a one-lobe rotor
         k = pair[1] if n > 2 and (pair[0], pair[1]) == (0, n - 1) else pair[0]
         # Two lobes: both grooves lie between the same two tips; the centroid of a
@@ -379,6 +382,16 @@ class SectionCutter(GrooveAges, Boundaries):
             if part is not None:
                 part.centroid = centroid(part.polygons[0])
         return parts
+
+
+def _overlap(rings):
+    """Where the rotors' rings (Clipper units) overlap: with a reversed box round both,
+    winding +1 there alone (one Clipper sweep, without building each rotor's)."""
+    from manifold3d import CrossSection, FillRule
+
+    big = 10.0 * UNITS
+    box = np.array([[-big, -big], [-big, big], [big, big], [big, -big]])
+    return CrossSection([*rings, box], FillRule.Positive)
 
 
 def _meets(box, lo, hi) -> bool:

@@ -114,22 +114,25 @@ def _scan(pair, points_per_period):
     return psis, [_cut(pair, float(p)) for p in psis]
 
 
+class _PolygonsOnly(list):
+    """The parts of a polygons-only cut (:meth:`.regions.SectionCutter.cut`)."""
+
+
 def _cut(pair, residue: float, polygons_only: bool = False):
     """The section at ``residue`` (an angle in the period from -beta_0), cut once per
     pair: the table, the female parts' shift and the ports' chamber polygons ask for
-    many of the same angles.  A polygons-only cut (:meth:`.regions.SectionCutter.cut`)
-    serves polygons-only requests alone."""
+    many of the same angles.  A polygons-only cut serves polygons-only requests alone
+    (a whole one replaces it)."""
     key = round(residue / RESIDUE_TOL)
     cuts = pair.cut_memo
-    if key in cuts:
-        return cuts[key]
-    if polygons_only and (key, "polygons") in cuts:
-        return cuts[(key, "polygons")]
-    if len(cuts) >= CUT_MEMO:
+    held = cuts.get(key)
+    if held is not None and (polygons_only or not isinstance(held, _PolygonsOnly)):
+        return held
+    if held is None and len(cuts) >= CUT_MEMO:
         cuts.pop(next(iter(cuts)))
     parts = pair.cutter.cut(residue, polygons_only)
-    cuts[(key, "polygons") if polygons_only else key] = parts
-    return parts
+    cuts[key] = _PolygonsOnly(parts) if polygons_only else parts
+    return cuts[key]
 
 
 def chamber_index(pair, part, psi, shift) -> int:

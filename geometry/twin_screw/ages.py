@@ -53,9 +53,8 @@ class GrooveAges:
         n = pair.gearing.lobes_male if rotor == MALE else pair.gearing.lobes_female
         period = TWO_PI / n
         tip0 = pair.tip_angle(rotor)
-        middle = centroid(rings[0])
         if groove is None:
-            local = self.to_rotor(rotor, middle, psi)
+            local = self.to_rotor(rotor, centroid(rings[0]), psi)
             groove = int(math.floor(((math.atan2(local[1], local[0]) - tip0) % TWO_PI)
                                     / period)) % n
         k = groove
@@ -89,7 +88,7 @@ class GrooveAges:
         elif abs(rate) > POCKET_RATE * self.C ** 2:
             age = theta if rate > 0.0 else theta + TWO_PI
         else:
-            age = theta if middle[1] > 0.0 else theta + TWO_PI
+            age = theta if centroid(rings[0])[1] > 0.0 else theta + TWO_PI
         return k, age * scale
 
     @cached_property

@@ -40,7 +40,7 @@ from scipy.spatial import cKDTree
 
 from ..curves import sample
 from ..planar import TWO_PI, rotate
-from .ages import GrooveAges, centroid
+from .ages import GrooveAges
 from .boundaries import FEMALE, LENS_MATCH, MALE, Boundaries
 
 #: Coordinates run in units of C / UNITS inside Clipper (it rounds to 1e-8).
@@ -109,7 +109,7 @@ class Part:
     contact_rates: list = field(default_factory=list)  # d point / d psi of each
     side: str = ""  # "top" (newborn side), "bottom" (dying side) or "" (isolated)
     piece: int = 0  # which connected piece of the whole fluid it was cut from
-    centroid: np.ndarray | None = None  # set until its age is known
+    walked: bool = False  # cut from the fluid's pieces and walked: its age is found after
     polygons: list = field(default_factory=list)  # rings, metres, fixed frame
     #: length of its cut along the cusp line from its own side's cusp point (the
     #: opening to the other rotor's groove there; :mod:`.blowhole`)
@@ -221,7 +221,7 @@ class SectionCutter(GrooveAges, Boundaries):
         self._contacts(psi, _overlap(rings).decompose())
         self._loads()
         for part in parts:
-            if part.centroid is not None:
+            if part.walked:
                 rate = part.torque[MALE] - self.ratio * part.torque[FEMALE]
                 part.groove, part.age = self._groove_age(part.rotor, part.polygons, psi,
                                                          part.side, rate=rate)
@@ -372,15 +372,12 @@ class SectionCutter(GrooveAges, Boundaries):
                 continue
             own = [q / self.k for q in sub.to_polygons()]
             parts.append(Part(rotor, 0, 0.0, area, np.zeros((2, 2)), np.zeros(2), np.zeros(2),
-                              side=side, piece=number, polygons=own))
+                              side=side, piece=number, polygons=own, walked=True))
             rings.extend((ring, parts[-1]) for ring in own)
         if rings:
             labels = self._labels([ring for ring, _ in rings], psi)
             for (ring, part), lab in zip(rings, labels, strict=True):
                 self._walk(ring, lab, psi, part)
-        for part in parts:
-            if part is not None:
-                part.centroid = centroid(part.polygons[0])
         return parts
 
 

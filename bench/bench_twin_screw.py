@@ -15,13 +15,13 @@ times per period).  Target (issue 13):
 geometry figures and table of a 4/6 pair at 1e-4 relative error in under 1 s.
 
 Last measured (loaded 2-core machine, 1 core), at 24 / 48 / 96 / 192 points per period:
-CPU 1.99 / 2.75 / 4.44 / 9.19 s (pin-cycloid), 2.80 / 3.62 / 5.83 / 11.1 s (circular);
-one quiet run at 24: 1.64 and 1.84 s.  Discharge areas 9.5e-5 / 8.4e-5 / 5.8e-5 /
-3.0e-5 (pin-cycloid) and 7.4e-4 / 1.3e-3 / 2.3e-4 / 1.1e-4 (circular), suction
-9.3e-5 / 8.8e-5 / 5.7e-5 / 1.8e-5 and 1.8e-4 / 8.2e-5 / 6.7e-5 / 2.8e-5; Pi_max within
-2.5e-5, V_max 1e-7, the lines 5.1e-5 (the circular's interlobe at 24) of theirs.  So
-the pin-cycloid meets the error at every resolution and the time at none; the
-circular misses the error on its discharge (the sealed region's sweep,
+CPU 1.72 / 2.72 / 4.36 / 8.95 s (pin-cycloid), 2.42 / 3.29 / 5.24 / 10.1 s (circular);
+at 24, the least of nine runs on one core: 1.36 and 1.54 s.  Discharge areas 9.5e-5 /
+8.8e-5 / 5.5e-5 / 2.7e-5 (pin-cycloid) and 7.4e-4 / 3.5e-4 / 2.6e-4 / 1.1e-4
+(circular), suction 9.3e-5 / 8.8e-5 / 5.7e-5 / 1.8e-5 and 1.8e-4 / 8.2e-5 / 6.7e-5 /
+2.8e-5; Pi_max within 2.5e-5, V_max 1e-7, the lines 5.1e-5 (the circular's interlobe at
+24) of theirs.  So the pin-cycloid meets the error at every resolution and the time at
+none; the circular misses the error on its discharge (the sealed region's sweep,
 geometry/port_areas.py) below 192.
 """
 

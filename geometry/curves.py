@@ -341,33 +341,44 @@ def sample(curve, tol: float, max_step: float = math.inf) -> np.ndarray:
     """
     if not tol > 0.0:
         raise CaseError(f"the sampling tolerance must be positive, got {tol}")
-    out = []
+    # Every piece's curve evaluations in one call (a call costs the same whatever its
+    # length: 0.1 s of the twin screw's 1.5 s went to sampling its profiles piece by
+    # piece); each piece's grid and bisections are its own, as before.
     t = np.linspace(0.0, 1.0, PREGRID)
-    for j in range(curve.n):
-        u = j + t
-        u[-1] = j + 1.0 - 1e-13
-        d1 = curve.derivative(u)
-        speed = np.linalg.norm(d1, axis=-1)
-        kap = np.abs(curve.curvature(u))
+    n = curve.n
+    u = np.arange(n)[:, None] + t[None, :]
+    u[:, -1] = np.arange(n) + 1.0 - 1e-13
+    d1 = curve.derivative(u.ravel()).reshape(n, PREGRID, 2)
+    kappa = curve.curvature(u.ravel()).reshape(n, PREGRID)
+    pieces = []
+    for j in range(n):
+        speed = np.linalg.norm(d1[j], axis=-1)
+        kap = np.abs(kappa[j])
         kap = np.where(np.isfinite(kap), kap, 0.0)
         dens = np.maximum(np.sqrt(kap / (8.0 * tol)), 1.0 / max_step) * speed
-        cum = np.concatenate([[0.0], np.cumsum(0.5 * (dens[1:] + dens[:-1]) * np.diff(u))])
+        cum = np.concatenate([[0.0], np.cumsum(0.5 * (dens[1:] + dens[:-1]) * np.diff(u[j]))])
         if not cum[-1] > 0.0:  # a straight piece and no max_step: spread by parameter
             cum = t.copy()
         m = max(int(math.ceil(cum[-1] * 1.05)), 1)
         us = np.interp(np.linspace(0.0, cum[-1], m + 1), cum, j + t)
         us[-1] = j + 1.0
-        for _ in range(MAX_REFINE):
-            err, lab = _chord_error(curve, us[:-1], us[1:])
-            bad = (err > tol) | (lab > max_step)
-            if not bad.any():
-                break
-            mids = 0.5 * (us[:-1] + us[1:])[bad]
-            us = np.sort(np.concatenate([us, mids]))
-        else:
-            raise CaseError(f"the {curve.name} profile cannot be sampled to {tol * 1e6:.3g} um")
-        out.append(us[:-1])
-    return np.concatenate(out)
+        pieces.append(us)
+    todo = list(range(n))
+    for _ in range(MAX_REFINE):
+        err, lab = _chord_error(curve, np.concatenate([pieces[j][:-1] for j in todo]),
+                                np.concatenate([pieces[j][1:] for j in todo]))
+        bad = np.split((err > tol) | (lab > max_step),
+                       np.cumsum([len(pieces[j]) - 1 for j in todo])[:-1])
+        for j, b in zip(todo, bad, strict=True):
+            if b.any():
+                us = pieces[j]
+                pieces[j] = np.sort(np.concatenate([us, 0.5 * (us[:-1] + us[1:])[b]]))
+        todo = [j for j, b in zip(todo, bad, strict=True) if b.any()]
+        if not todo:
+            break
+    else:
+        raise CaseError(f"the {curve.name} profile cannot be sampled to {tol * 1e6:.3g} um")
+    return np.concatenate([us[:-1] for us in pieces])
 
 
 def sample_polygon(curve, tol: float) -> np.ndarray:

@@ -46,15 +46,15 @@ class GrooveAges:
         both sides) belongs to the dying chamber while it shrinks and to the newborn one
         while it grows (``rate``: its area's rate per male angle, which is its torques'
         power): so it changes hands at its smallest, and the chambers' areas stay
-        continuous but for that carry-over.
+        continuous but for that carry-over.  None for such a pocket when ``rate`` is
+        None (not known: a polygons-only cut).
         """
         pair = self.pair
         n = pair.gearing.lobes_male if rotor == MALE else pair.gearing.lobes_female
         period = TWO_PI / n
         tip0 = pair.tip_angle(rotor)
-        middle = centroid(rings[0])
         if groove is None:
-            local = self.to_rotor(rotor, middle, psi)
+            local = self.to_rotor(rotor, centroid(rings[0]), psi)
             groove = int(math.floor(((math.atan2(local[1], local[0]) - tip0) % TWO_PI)
                                     / period)) % n
         k = groove
@@ -83,10 +83,12 @@ class GrooveAges:
             age = theta
         elif side == "bottom":
             age = theta + TWO_PI
+        elif rate is None:
+            return None  # (a polygons-only cut: the caller cuts in full)
         elif abs(rate) > POCKET_RATE * self.C ** 2:
             age = theta if rate > 0.0 else theta + TWO_PI
         else:
-            age = theta if middle[1] > 0.0 else theta + TWO_PI
+            age = theta if centroid(rings[0])[1] > 0.0 else theta + TWO_PI
         return k, age * scale
 
     @cached_property

@@ -189,9 +189,15 @@ class OnRotor:
         if self.rotor != "male" or self.gearing is None:
             return np.full(np.shape(t), np.nan)
         try:
-            return MaleGenerated(self.arc, self.gearing, self.reverse).rolling_angle(t)
+            return self._conjugate.rolling_angle(t)
         except CaseError:  # a normal that misses the pitch circle: no contact there
             return np.full(np.shape(t), np.nan)
+
+    @cached_property
+    def _conjugate(self) -> MaleGenerated:
+        # (kept: its meshing branch costs three times a rolling angle, and the contact
+        # search asks for thousands)
+        return MaleGenerated(self.arc, self.gearing, self.reverse)
 
 
 @dataclass(frozen=True)

@@ -114,16 +114,24 @@ def _scan(pair, points_per_period):
     return psis, [_cut(pair, float(p)) for p in psis]
 
 
-def _cut(pair, residue: float):
+class _PolygonsOnly(list):
+    """The parts of a polygons-only cut (:meth:`.regions.SectionCutter.cut`)."""
+
+
+def _cut(pair, residue: float, polygons_only: bool = False):
     """The section at ``residue`` (an angle in the period from -beta_0), cut once per
     pair: the table, the female parts' shift and the ports' chamber polygons ask for
-    many of the same angles."""
+    many of the same angles.  A polygons-only cut serves polygons-only requests alone
+    (a whole one replaces it)."""
     key = round(residue / RESIDUE_TOL)
     cuts = pair.cut_memo
-    if key not in cuts:
-        if len(cuts) >= CUT_MEMO:
-            cuts.pop(next(iter(cuts)))
-        cuts[key] = pair.cutter.cut(residue)
+    held = cuts.get(key)
+    if held is not None and (polygons_only or not isinstance(held, _PolygonsOnly)):
+        return held
+    if held is None and len(cuts) >= CUT_MEMO:
+        cuts.pop(next(iter(cuts)))
+    parts = pair.cutter.cut(residue, polygons_only)
+    cuts[key] = _PolygonsOnly(parts) if polygons_only else parts
     return cuts[key]
 
 
@@ -381,7 +389,7 @@ def chamber_polygons(pair, phi: float, contacts: list | None = None) -> list[np.
     residue = float(phi - q * period)
     shift = pair.female_shift
     out = []
-    for p in _cut(pair, residue):
+    for p in _cut(pair, residue, polygons_only=contacts is None):
         if chamber_index(pair, p, residue, shift) == q:
             out.extend(p.polygons)
             if contacts is not None:

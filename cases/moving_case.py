@@ -74,6 +74,10 @@ class RunControls:
     #: exceeds this is "inconsistent": the PIMPLE loop runs in PISO mode (one outer
     #: corrector), which needs it below 1.
     max_courant: float = 1.0
+    #: Fields written every this many key frames (0: at the end only), on the frame
+    #: times, where the grid is known exactly: the chambers' pressures are taken from the
+    #: grid's own topology there (:mod:`.moving_chambers`).
+    write_every_frames: int = 0
     #: Mass of the closed domain: relative change allowed over the run (issue 17's 1e-4
     #: over a revolution).
     mass_tol: float = 1e-4
@@ -99,6 +103,22 @@ def _ends(xy, end):
     return np.full(len(xy), ENDS), {ENDS: "wall"}
 
 
+def chamber_cells(s: MovingSection, grid, phi: float) -> tuple[dict, np.ndarray]:
+    """({slot: cells} without the gap columns, the gap columns' cells) of the grid at
+    outer angle ``phi``: the chambers by the O-grid's own topology there
+    (:func:`.machine_zones.chamber_zones`); slot s holds the chamber of machine age
+    ``phi + s * period``, the same chamber at every angle."""
+    zones = chamber_zones(s.pair, [grid, grid], np.array([0.0, s.depth]), phi,
+                          Sweep("straight", s.depth))
+    p = grid.points
+    length = np.linalg.norm(p[:, -1] - p[:, 0], axis=1)
+    # a cell column spans node columns i and i + 1: a gap column if either is short
+    short = np.minimum(length, np.roll(length, -1)) <= GAP_COLUMN_RATIO * s.gap
+    gap_cell = np.repeat(short, grid.cells_across)  # cell (i, j) is i * rows + j
+    cells = {c: np.flatnonzero((zones.cell_slot == c) & ~gap_cell) for c in zones.slots}
+    return {k: v for k, v in cells.items() if v.size}, gap_cell
+
+
 def _zones(s: MovingSection, grid, mesh) -> tuple[dict, dict, int]:
     """(cellZones by slot, "gaps" included; sealing faces by slot pair; gap cells) at the
     start angle: chambers without their gap columns, the gap columns, the faces between
@@ -106,13 +126,7 @@ def _zones(s: MovingSection, grid, mesh) -> tuple[dict, dict, int]:
     pts, faces, owner, nei, patches = mesh
     zones = chamber_zones(s.pair, [grid, grid], np.array([0.0, s.depth]), s.start,
                           Sweep("straight", s.depth))
-    p = grid.points
-    length = np.linalg.norm(p[:, -1] - p[:, 0], axis=1)
-    # a cell column spans node columns i and i + 1: a gap column if either is short
-    short = np.minimum(length, np.roll(length, -1)) <= GAP_COLUMN_RATIO * s.gap
-    gap_cell = np.repeat(short, grid.cells_across)  # cell (i, j) is i * rows + j
-    cell_zones = {c: np.flatnonzero((zones.cell_slot == c) & ~gap_cell) for c in zones.slots}
-    cell_zones = {k: v for k, v in cell_zones.items() if v.size}
+    cell_zones, gap_cell = chamber_cells(s, grid, s.start)
     cell_zones["gaps"] = np.flatnonzero(gap_cell)
     return cell_zones, seal_faces(zones, owner, nei), int(gap_cell.sum())
 
@@ -208,7 +222,8 @@ def _write_dicts(s: MovingSection, case_dir: Path, c: RunControls, chambers: lis
     write_dict(system / "controlDict", control_dict(
         SOLVER, start_from="startTime", end_time=s.duration,
         delta_t=frame_dt / c.steps_per_frame, time_step={"adjustTimeStep": False},
-        write_control="runTime", write_interval=s.duration, purge_write=0,
+        write_control="runTime", purge_write=0,
+        write_interval=frame_dt * c.write_every_frames if c.write_every_frames else s.duration,
         time_precision=12, run_time_modifiable=False, functions=functions))
     lin_up = ("Gauss", "linearUpwind", "limited")
     schemes = fv_schemes("Euler", {

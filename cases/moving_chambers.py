@@ -85,3 +85,37 @@ def compare(cfd: dict, model_p: np.ndarray) -> dict:
                   "rms": float(np.sqrt(np.mean(d * d))) / swing,
                   "swing_Pa": swing, "left_out": int((~ok).sum())}
     return out
+
+
+def comparison_record(s: MovingSection, run, case_dir: Path, raw: dict, where: Path,
+                      models, correlation: Path | None = None) -> dict:
+    """A completed run's chamber pressures (:func:`topology_pressures`) against the
+    closed-section quasi-1D model under each leakage model (:mod:`.moving_quasi1d`, the
+    case file ``raw``'s machine at the run's depth, clearance and gas), as recorded in
+    ``tests/data``: small, and re-checkable offline with :func:`compare`."""
+    import time
+
+    from rotorflow.errors import CaseError
+
+    from .moving_quasi1d import section_models, simulate_closed
+
+    if not run.ok:
+        raise CaseError(f"the run is {run.status} ({run.message}): not compared")
+    cfd = topology_pressures(s, case_dir)
+    angles = np.radians(cfd["angles_deg"])
+    rec = {"cfd": {"status": run.status, "cells": run.cells, "time_steps": run.time_steps,
+                   "run_time_s": run.run_time_s, "mass_drift": run.mass_drift,
+                   "max_courant": run.max_courant, "wall_velocity": run.wall_velocity,
+                   "gap_m": s.gap, "depth_m": s.depth, "start_deg": math.degrees(s.start),
+                   "span_deg": math.degrees(s.span), "chambers": cfd}, "models": {}}
+    for name, sm in section_models(raw, where, s.depth, s.gap, s.gas, models,
+                                   correlation).items():
+        if not math.isclose(sm.model.geo.omega_outer, s.omega_outer, rel_tol=1e-9):
+            raise CaseError(f"the case's outer-rotor speed {sm.model.geo.omega_outer:.6g} "
+                            f"rad/s is not the run's {s.omega_outer:.6g}")
+        t0 = time.perf_counter()
+        got = simulate_closed(sm, s.start, s.span, s.omega_outer, s.p0, s.T0, angles)
+        rec["models"][name] = {"p": got["p"].tolist(), "mass_drift": got["mass_drift"],
+                               "seconds": time.perf_counter() - t0,
+                               "errors": compare(cfd, got["p"])}
+    return rec

@@ -163,7 +163,8 @@ def simulate_closed(sm: SectionModel, start: float, span: float, omega: float,
         for j in range(-2, int(span / P) + 3)
         if start < sm.origin + b + j * P < start + span})
     cuts = [c for i, c in enumerate(cuts) if i == 0 or c - cuts[i - 1] > 1e-9]
-    angles = np.asarray(angles, float)
+    # written times carry round-off: an angle a hair past the end is the end's
+    angles = np.clip(np.asarray(angles, float), start, start + span)
     out = np.full((len(angles), N), np.nan)
     atol = RTOL * 1e-3 * np.abs(y0)  # per chamber: mass and energy on their own scales
     mass = []

@@ -184,3 +184,22 @@ def test_the_wall_velocity_misses_the_mesh_flux_for_another_step(frames_quarter_
     # built for a step twice the one the mesh moves in: the check must see it
     out = _wall_checks(s, grids, 16, built_for=2.0 * s.duration / s.frames / 16)
     assert min(out[p]["normal_max"] for p in moving_case.ROTORS) > 1e-7
+
+
+def test_a_run_above_the_courant_limit_is_inconsistent(tmp_path):
+    s = _section(0.25, 2)
+    case = tmp_path / "run"
+    case.mkdir()
+    _, built = moving_case.write_case(s, case)
+    for name in ["mass", "Co_gaps", "Co_all", *[f"p_{slot_name(c)}" for c in built.chambers]]:
+        d = case / "postProcessing" / name / "0"
+        d.mkdir(parents=True)
+        v = 1.5 if name.startswith("Co") else 1.0  # the step is fixed: nothing held it
+        (d / "volFieldValue.dat").write_text("# Time value\n" + "".join(
+            f"{t:.12g} {v:.12g}\n" for t in np.linspace(built.duration / 10, built.duration, 10)))
+    (case / f"log.{moving_case.SOLVER}").write_text("Time = 1\nEnd\n")
+    run = moving_case.judge(case, built, moving_case.RunControls(), 1.0, "")
+    assert run.status == "inconsistent" and "Courant" in run.message
+    ok = moving_case.judge(case, built, replace(moving_case.RunControls(), max_courant=2.0),
+                           1.0, "")
+    assert ok.ok

@@ -149,3 +149,57 @@ def test_a_run_whose_mass_drifts_is_inconsistent(tmp_path):
                            1.0, "")
     assert ok.ok  # the same tables within a looser bound: the check is the drift's
     shutil.rmtree(case)
+
+
+
+def _wall_checks(s, grids, steps, built_for=None):
+    from rotorflow.cases import moving_walls
+    from rotorflow.cases.polymesh import build_polymesh
+
+    mesh = build_polymesh([grids[0], grids[0]], np.array([0.0, s.depth]), moving_case._ends)
+    frames = [g.points.reshape(-1, 2) for g in grids]
+    out = {}
+    for patch in moving_case.ROTORS:
+        omega, axis = moving_case._rotor(s, patch)
+        out[patch] = moving_walls.check(
+            frames, s.frame_times, moving_walls.wall_edges(mesh, patch),
+            s.duration / s.frames / steps, omega, axis, steps, built_for)
+    return out
+
+def test_the_wall_velocity_carries_the_mesh_flux_and_the_rotors_omega_x_r(frames_quarter_deg):
+    s, grids = frames_quarter_deg
+    out = _wall_checks(s, grids, 16)
+    for patch in moving_case.ROTORS:
+        # the flux of the imposed velocity against the area each wall face sweeps in
+        # every step, by the shoelace of its old and new edge: round-off
+        assert out[patch]["normal_max"] <= 1e-10
+        # tangentially the rotor's own surface velocity, to well within 1 % of the tip
+        # speed (the grid's own sliding velocity is 11 % / 31 % RMS off)
+        assert out[patch]["tangential_rms"] <= 0.002
+        assert out[patch]["tangential_max"] <= 0.01
+
+
+def test_the_wall_velocity_misses_the_mesh_flux_for_another_step(frames_quarter_deg):
+    s, grids = frames_quarter_deg
+    # built for a step twice the one the mesh moves in: the check must see it
+    out = _wall_checks(s, grids, 16, built_for=2.0 * s.duration / s.frames / 16)
+    assert min(out[p]["normal_max"] for p in moving_case.ROTORS) > 1e-7
+
+
+def test_a_run_above_the_courant_limit_is_inconsistent(tmp_path):
+    s = _section(0.25, 2)
+    case = tmp_path / "run"
+    case.mkdir()
+    _, built = moving_case.write_case(s, case)
+    for name in ["mass", "Co_gaps", "Co_all", *[f"p_{slot_name(c)}" for c in built.chambers]]:
+        d = case / "postProcessing" / name / "0"
+        d.mkdir(parents=True)
+        v = 1.5 if name.startswith("Co") else 1.0  # the step is fixed: nothing held it
+        (d / "volFieldValue.dat").write_text("# Time value\n" + "".join(
+            f"{t:.12g} {v:.12g}\n" for t in np.linspace(built.duration / 10, built.duration, 10)))
+    (case / f"log.{moving_case.SOLVER}").write_text("Time = 1\nEnd\n")
+    run = moving_case.judge(case, built, moving_case.RunControls(), 1.0, "")
+    assert run.status == "inconsistent" and "Courant" in run.message
+    ok = moving_case.judge(case, built, replace(moving_case.RunControls(), max_courant=2.0),
+                           1.0, "")
+    assert ok.ok

@@ -88,10 +88,11 @@ def compare(cfd: dict, model_p: np.ndarray) -> dict:
 
 
 def comparison_record(s: MovingSection, run, case_dir: Path, raw: dict, where: Path,
-                      models, correlation: Path | None = None) -> dict:
+                      models, case_of, correlation: Path | None = None) -> dict:
     """A completed run's chamber pressures (:func:`topology_pressures`) against the
     closed-section quasi-1D model under each leakage model (:mod:`.moving_quasi1d`, the
-    case file ``raw``'s machine at the run's depth, clearance and gas), as recorded in
+    case file ``raw``'s machine at the run's depth, clearance and gas, made by
+    ``case_of``, the workflow's case_from_raw), as recorded in
     ``tests/data``: small, and re-checkable offline with :func:`compare`."""
     import time
 
@@ -108,7 +109,7 @@ def comparison_record(s: MovingSection, run, case_dir: Path, raw: dict, where: P
                    "max_courant": run.max_courant, "wall_velocity": run.wall_velocity,
                    "gap_m": s.gap, "depth_m": s.depth, "start_deg": math.degrees(s.start),
                    "span_deg": math.degrees(s.span), "chambers": cfd}, "models": {}}
-    for name, sm in section_models(raw, where, s.depth, s.gap, s.gas, models,
+    for name, sm in section_models(raw, where, s.depth, s.gap, s.gas, models, case_of,
                                    correlation).items():
         if not math.isclose(sm.model.geo.omega_outer, s.omega_outer, rel_tol=1e-9):
             raise CaseError(f"the case's outer-rotor speed {sm.model.geo.omega_outer:.6g} "

@@ -61,14 +61,14 @@ def slab_raw(raw: dict, depth: float, gap: float, gas) -> dict:
     return out
 
 
-def section_models(raw: dict, where: Path, depth: float, gap: float, gas, models,
+def section_models(raw: dict, where: Path, depth: float, gap: float, gas, models, case_of,
                    correlation: Path | None = None) -> dict:
-    """{leakage model: SectionModel} of the slab (see the module docstring)."""
-    from rotorflow.workflow.case import case_from_raw
-
+    """{leakage model: SectionModel} of the slab (see the module docstring); ``case_of``
+    makes the case of a parsed case file (the workflow's case_from_raw: the cases layer
+    does not read case files itself)."""
     from .machine_setup import case_table, comparison_raw, quasi1d_model, table_origin
 
-    case = case_from_raw(slab_raw(raw, depth, gap, gas), Path(where))
+    case = case_of(slab_raw(raw, depth, gap, gas), Path(where))
     table = case_table(case)
     origin = table_origin(case)
     out = {}

@@ -41,6 +41,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from rotorflow.errors import CaseError
+
+from .keys import _number
 from .network import ACC_H_SUC, ACC_M_SUC
 
 # eta_c(omega) of the omega method, tabulated once in log omega: the root of
@@ -131,3 +134,50 @@ def inlet_mass_ratio(op, rho_g_suction: float) -> float:
     """Liquid mass per gas mass of the inlet mixture: rho_l (1 - beta) / (rho_g beta)."""
     beta = op.gas_volume_fraction
     return op.liquid_density_kg_m3 * (1.0 - beta) / (rho_g_suction * beta)
+
+
+def parse_keys(d: dict, s: str, where: str) -> dict:
+    """The liquid keys of [operating] (see Operating): a gas volume fraction in (0, 1]
+    (the liquid fraction 1 - beta in [0, 1)), below 1 only with the liquid's density and
+    not beside injected oil; liquid_cp_J_kgK names the liquid's heat capacity (the oil's
+    field: one liquid per case)."""
+    out = {}
+    if "liquid_density_kg_m3" in d:
+        out["liquid_density_kg_m3"] = _number(d, "liquid_density_kg_m3", s, where, positive=True)
+    beta = _number(d, "gas_volume_fraction", s, where, 1.0, positive=True)
+    if beta > 1.0:
+        raise CaseError(f"key 'gas_volume_fraction' in [{s}] of {where} must be in (0, 1] "
+                        f"(the liquid fraction 1 - beta in [0, 1)), got {beta}")
+    if beta < 1.0:
+        if "liquid_density_kg_m3" not in d:
+            raise CaseError(f"gas_volume_fraction < 1 in [{s}] of {where} needs the liquid's "
+                            "liquid_density_kg_m3")
+        if d.get("oil_mass_ratio", 0.0):
+            raise CaseError(f"give gas_volume_fraction or oil_mass_ratio in [{s}] of {where}, "
+                            "not both (one liquid per case)")
+    out["gas_volume_fraction"] = beta
+    if "liquid_cp_J_kgK" in d:
+        if "oil_cp_J_kgK" in d:
+            raise CaseError(f"give liquid_cp_J_kgK or oil_cp_J_kgK in [{s}] of {where}, "
+                            "not both (one liquid per case)")
+        out["cp"] = _number(d, "liquid_cp_J_kgK", s, where, positive=True)
+    return out
+
+
+def leak_mix(model, seg, X, fwd, x, p1, r1, k1):
+    """The mixture's factor on each leakage flow and the liquid's p / rho_l upstream
+    (:func:`.oil.leakage`'s ``mix``); k1 the gas's kappa, a scalar or per flow."""
+    nl, inv = seg.n_leak, model.inv_rho_liquid
+    Xu = np.where(fwd[:, :nl], X[:, seg.ia[:nl]], X[:, seg.ib[:nl]])
+    kl = k1 if not np.ndim(k1) else k1[:, :nl]
+    return mixture_factor(x[:, :nl], kl, r1[:, :nl], Xu, inv), p1[:, :nl] * inv
+
+
+def port_volumes(model, y, dy, V, Vt, m, na):
+    """The ideal ports' view of the gas (:func:`.kernel.ideal_ports`): its volume, its
+    rate without the port's liquid (dy holds the liquid's leakage) and the liquid
+    volume leaving per kg of gas."""
+    n, inv = model.n, model.inv_rho_liquid
+    mo = y[:, 2 * n:2 * n + na]
+    Vt_g = Vt - dy[:, 2 * n:2 * n + na] * (inv / model.inv_omega)
+    return gas_volume(V, mo, inv), Vt_g, mo * inv / m

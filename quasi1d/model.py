@@ -6,10 +6,10 @@ period's start, the last slot dies inside the period.  After one period slot k h
 become slot k+1 of the next, so integrating one period and shifting the slots is one
 cycle of the machine (seed 000: chambers are the same chamber shifted by 2 pi / N1).
 
-State per slot: mass m and internal energy U of the gas (and, with oil injection, the
-oil mass and its enthalpy).  With the volume V these give rho and u, from which every
-fluid gives p and T without inner iteration; with (m, U) as state, mass and energy are
-linear invariants, which an explicit Runge-Kutta method conserves to round-off.
+State per slot: mass m and internal energy U of the gas (and the oil's or liquid's mass
+and energy, :mod:`.oil`, :mod:`.liquid`).  With the gas's volume they give rho and u,
+hence p and T without inner iteration; mass and energy are linear invariants, which an
+explicit Runge-Kutta method conserves to round-off.
 
     dm/dt = sum of mass flows in
     dU/dt = sum of (mass flow in * enthalpy of its upstream side) + Q - p dV/dt
@@ -20,17 +20,14 @@ d/dtheta = (1/omega) d/dt.
 Flow paths: the leakage paths the chamber table declares (for the internal gear: the
 sealing lines to the older and younger chambers, the end faces to the suction and the
 discharge plenum), each with its own gap, coefficient and flow model (:mod:`.paths`),
-joined into a network per segment of the period (:mod:`.network`).  With moving walls
-(Leakage.wall_motion) the paths declared with moving walls also carry the gas the rotor
-surface drags from the older into the younger chamber: a Couette term of its own, or,
-with the "cfd-calibrated" model and a fit that has a wall term, the fit's drag term, the
-wall speed passed to the correlation.  With oil injected the leakage is a homogeneous
-gas-oil mixture (Leakage.mixture; :mod:`.oil`): the gas flow falls by 1 / sqrt(1 + X)
-and the oil leaks along, X the upstream node's oil per gas mass.  Ports: suction open
-from birth to suction_close through area_lp, discharge open from discharge_open to death
-through area_hp; "nozzle" ports are flows like the others, "ideal" ports hold the
-chamber at the plenum pressure
-(the port flow is solved from dp/dt = 0 with a weak drift correction).
+joined into a network per segment of the period (:mod:`.network`).  Moving walls
+(Leakage.wall_motion) drag gas from the older into the younger chamber: a Couette term,
+or with "cfd-calibrated" and a fit that has a wall term, the fit's drag term.
+With oil or a liquid the leakage is a homogeneous mixture (:mod:`.oil`, :mod:`.liquid`).
+Ports: suction open from birth to suction_close through area_lp, discharge from
+discharge_open to death through area_hp; "nozzle" ports are flows like the others,
+"ideal" ports hold the chamber at the plenum pressure (the port flow solved from
+dp/dt = 0 with a weak drift correction).
 
 Accumulators ride along the state (quadratures of the same flows): mass and enthalpy
 from suction and to discharge, work done on the gas, heat, gross leakage per report key
@@ -94,8 +91,7 @@ class ChamberModel:
     e_ref: float  # p_suction * V_max
     ideal_gas: bool
     inv_omega: float
-    # the liquid (quasi1d/liquid.py): 1 / its density (0: its volume neglected) and its
-    # mass per gas mass in the discharge plenum (the injected or inlet ratio)
+    # 1 / the liquid's density (0: no volume) and its mass per gas mass (.liquid)
     inv_rho_liquid: float = 0.0
     liquid_ratio: float = 0.0
     cache: dict = field(default_factory=dict, repr=False, compare=False)
@@ -113,10 +109,7 @@ class ChamberModel:
 
     @property
     def liquid_datum_K(self) -> float:
-        """The oil's or liquid's energy is counted from its inlet temperature: Ho =
-        mo c (T_l - datum).  From 0 K its books would carry mo c T, a hundred times the
-        work in a multiphase pump (liquid mass ~100 times the gas's), and the period's
-        energy balance would drown in that offset's round-off."""
+        """Ho = mo c (T_l - datum): from 0 K a pump's books would drown its work."""
         return self.op.oil_temperature_K
 
     def acc(self, y):
@@ -139,7 +132,6 @@ class ChamberModel:
         s[n:2 * n] = self.e_ref + self.m_ref * abs(self.suc.u)
         if self.oil:
             s[2 * n:3 * n] = self.m_ref * max(self.liquid_ratio, 1e-3)
-            # the scale of an absolute temperature: an error of 1e-6 of it is ~0.3 mK
             s[3 * n:4 * n] = s[2 * n:3 * n] * self.op.oil_cp_J_kgK * self.op.oil_temperature_K
         a = s[self.nv * n:]
         a[:] = self.m_ref
@@ -229,10 +221,8 @@ class ChamberModel:
         g = self._geometry(theta, seg)
         iV, area, cou = g[1], g[4], g[5]
         m = y[:, :na]
-        if self.inv_rho_liquid:
-            rho = m / liquid.gas_volume(g[0], y[:, 2 * n:2 * n + na], self.inv_rho_liquid)
-        else:
-            rho = m * iV
+        inv = self.inv_rho_liquid  # a liquid's volume leaves the gas V - mo / rho_l
+        rho = m / liquid.gas_volume(g[0], y[:, 2 * n:2 * n + na], inv) if inv else m * iV
         u = y[:, n:n + na] / m
         p, T, kap = fl.props(rho, u)
         h = u * fl.gamma if self.ideal_gas else u + p / rho
@@ -261,13 +251,8 @@ class ChamberModel:
         oil_flows = (None, None)
         if seg.oil is not None:  # a homogeneous gas-oil mixture leaks (see .oil)
             X, Y = node_loads(self, y, m, na)
-            mix = None
-            if self.inv_rho_liquid:  # the liquid's volume: the omega method (see .liquid)
-                nl = seg.n_leak
-                Xu = np.where(fwd[:, :nl], X[:, seg.ia[:nl]], X[:, seg.ib[:nl]])
-                kl = k1 if scalar_k else k1[:, :nl]
-                mix = (liquid.mixture_factor(x[:, :nl], kl, r1[:, :nl], Xu, self.inv_rho_liquid),
-                       p1[:, :nl] * self.inv_rho_liquid)
+            mix = liquid.leak_mix(self, seg, X, fwd, x, p1, r1, k1) \
+                if self.inv_rho_liquid else None  # the liquid's volume (see .liquid)
             oil_flows = oil_leakage(seg, F, X, Y, mix)
         if cou is not None:
             # Couette flow: carried from the older (node ib) into the younger chamber (ia)
@@ -317,10 +302,8 @@ class ChamberModel:
             q = wall * (self.op.wall_temperature_K - T)
             dy[:, acc0 + ACC_Q] = q.sum(axis=1) * w
         if self.oil:
-            mo = y[:, 2 * n:2 * n + na]
-            Ho = y[:, 3 * n:3 * n + na]
-            q_oil = (Ho - mo * self.op.oil_cp_J_kgK * (T - self.liquid_datum_K)) \
-                / self.op.oil_time_constant_s
+            op, mo, Ho = self.op, y[:, 2 * n:2 * n + na], y[:, 3 * n:3 * n + na]
+            q_oil = (Ho - mo * op.oil_cp_J_kgK * (T - self.liquid_datum_K)) / op.oil_time_constant_s
             q = q_oil if q is None else q + q_oil
         if q is not None:
             dy[:, n:n + na] += q * w
@@ -330,20 +313,15 @@ class ChamberModel:
         if seg.ideal.size:
             gamma, pr, pu = (self.fluid.gamma, p, p) if self.ideal_gas else (
                 0.0, *self.fluid.dp(rho, u))
-            kl = 0.0
-            if self.inv_rho_liquid:  # the gas's volume, its rate without the port's liquid
-                inv = self.inv_rho_liquid
-                mo = y[:, 2 * n:2 * n + na]
-                V, Vt = liquid.gas_volume(V, mo, inv), Vt - dy[:, 2 * n:2 * n + na] * (inv / w)
-                kl = mo * inv / m
+            V, Vt, kl = liquid.port_volumes(self, y, dy, V, Vt, m, na) \
+                if self.inv_rho_liquid else (V, Vt, 0.0)
             xs = kernel.ideal_ports(dy, pdV, V, Vt, rho, u, p, h, pr, pu, seg.ideal,
                                     seg.ideal_p, seg.ideal_h, seg.mx, seg.mxe,
                                     self.geo.omega_outer, IDEAL_PORT_RELAXATION_RAD, n, gamma,
                                     kl)
         if self.oil:
             slot_balances(self, seg, dy, xs, F, y, m, p, q_oil, w)
-            if self.inv_rho_liquid:
-                liquid.volume_work(dy, p, n, na, self.inv_rho_liquid)
+            liquid.volume_work(dy, p, n, na, self.inv_rho_liquid)  # (0: nothing moves)
         return dy
 
     def _fused_args(self, seg: Segment):
@@ -396,9 +374,8 @@ class ChamberModel:
         U = y[..., n:2 * n]
         live = (ages <= self.geo.death * (1 + 1e-12)) & (m > 0)
         m[~live] = np.nan
-        Vg = V
-        if self.inv_rho_liquid:
-            Vg = liquid.gas_volume(V, y[..., 2 * n:3 * n], self.inv_rho_liquid)
+        inv = self.inv_rho_liquid
+        Vg = liquid.gas_volume(V, y[..., 2 * n:3 * n], inv) if inv else V
         with np.errstate(invalid="ignore", divide="ignore"):
             p, T, _ = self.fluid.props(m / Vg, U / m)
         return ages, V, np.asarray(p, float), np.asarray(T, float), m
@@ -453,9 +430,8 @@ def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Port
         Td = fluid.T_ph(op.p_discharge_Pa, h_is)
         if op.fluid.startswith("CoolProp::"):  # (p, h): fixes a two-phase end state too
             dis_h = {"h": h_is}
-    ratio = op.oil_mass_ratio
-    if op.gas_volume_fraction < 1.0:
-        ratio = liquid.inlet_mass_ratio(op, suc.rho)
+    ratio = liquid.inlet_mass_ratio(op, suc.rho) if op.gas_volume_fraction < 1.0 \
+        else op.oil_mass_ratio
     if ratio > 0:
         Td = flooded_discharge_T(fluid, suc, op, ratio)
         dis_h = {}

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from rotorflow.errors import CaseError
 
 from .keys import _bool, _check_keys, _choice, _number
+from .liquid import parse_keys
 from .perfect_gas import PerfectGas
 
 BAR = 1.0e5
@@ -62,34 +63,6 @@ def check_fluid(name: str, where: str = "the case") -> str:
         f"unknown fluid {name!r} in [operating] of {where}: use \"air\" (ideal gas) "
         f"or \"CoolProp::<name>\", e.g. \"CoolProp::Air\""
     )
-
-
-def _liquid(d: dict, s: str, where: str) -> dict:
-    """The liquid keys of [operating] (see Operating): a gas volume fraction in (0, 1]
-    (the liquid fraction 1 - beta in [0, 1)), below 1 only with the liquid's density and
-    not beside injected oil; liquid_cp_J_kgK names the liquid's heat capacity (the oil's
-    field: one liquid per case)."""
-    out = {}
-    if "liquid_density_kg_m3" in d:
-        out["liquid_density_kg_m3"] = _number(d, "liquid_density_kg_m3", s, where, positive=True)
-    beta = _number(d, "gas_volume_fraction", s, where, 1.0, positive=True)
-    if beta > 1.0:
-        raise CaseError(f"key 'gas_volume_fraction' in [{s}] of {where} must be in (0, 1] "
-                        f"(the liquid fraction 1 - beta in [0, 1)), got {beta}")
-    if beta < 1.0:
-        if "liquid_density_kg_m3" not in d:
-            raise CaseError(f"gas_volume_fraction < 1 in [{s}] of {where} needs the liquid's "
-                            "liquid_density_kg_m3")
-        if d.get("oil_mass_ratio", 0.0):
-            raise CaseError(f"give gas_volume_fraction or oil_mass_ratio in [{s}] of {where}, "
-                            "not both (one liquid per case)")
-    out["gas_volume_fraction"] = beta
-    if "liquid_cp_J_kgK" in d:
-        if "oil_cp_J_kgK" in d:
-            raise CaseError(f"give liquid_cp_J_kgK or oil_cp_J_kgK in [{s}] of {where}, "
-                            "not both (one liquid per case)")
-        out["cp"] = _number(d, "liquid_cp_J_kgK", s, where, positive=True)
-    return out
 
 
 @dataclass(frozen=True)
@@ -218,7 +191,7 @@ class Operating:
         if perfect and heat_capacity == "temperature":
             raise CaseError(f"key '{perfect[0]}' in [{s}] of {where} sets a constant-cp gas; "
                             "heat_capacity = \"temperature\" uses dry air's cp(T)")
-        liquid = _liquid(d, s, where)
+        liquid = parse_keys(d, s, where)
         return cls(
             p_suction_Pa=ps * BAR,
             p_discharge_Pa=pd * BAR,

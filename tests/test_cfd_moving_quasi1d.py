@@ -20,7 +20,7 @@ import pytest
 from rotorflow.cases.moving_chambers import compare
 from rotorflow.cases.moving_quasi1d import _volumes, section_models, simulate_closed
 from rotorflow.quasi1d.perfect_gas import PerfectGas
-from rotorflow.workflow.case import load_toml
+from rotorflow.workflow.case import case_from_raw, load_toml
 
 ROOT = Path(__file__).resolve().parents[1]
 CASE = ROOT / "examples" / "default.toml"
@@ -31,7 +31,8 @@ GAS = PerfectGas()
 
 @pytest.fixture(scope="module")
 def models():
-    return section_models(load_toml(CASE), CASE, 0.01, 100e-6, GAS, ["none", "nozzle"])
+    return section_models(load_toml(CASE), CASE, 0.01, 100e-6, GAS, ["none", "nozzle"],
+                          case_from_raw)
 
 
 def test_sealed_chambers_follow_the_adiabat(models):

@@ -31,7 +31,7 @@ from rotorflow.cases.moving_chambers import comparison_record, topology_pressure
 from rotorflow.cases.moving_section import MovingSection
 from rotorflow.cases.ogrid import OGridSpec
 from rotorflow.geometry.internal_gear.family import examples
-from rotorflow.workflow.case import load_toml
+from rotorflow.workflow.case import case_from_raw, load_toml
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[3]
@@ -53,7 +53,8 @@ def main(runs: Path, steps: int = STEPS) -> Path:
                                                     write_every_frames=2))
     out = HERE / ("lobe_100um.json" if steps == STEPS else f"lobe_100um_s{steps}.json")
     if run.ok:
-        rec = comparison_record(s, run, folder, load_toml(CASE), CASE, MODELS, FIT)
+        rec = comparison_record(s, run, folder, load_toml(CASE), CASE, MODELS, case_from_raw,
+                                FIT)
     else:
         rec = {"cfd": {"status": run.status, "message": run.message,
                        "log_tail": run.log_tail}}

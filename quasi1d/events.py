@@ -52,12 +52,10 @@ def apply_event(model, kind: str, k: int, theta: float, y: np.ndarray) -> None:
     elif kind == "close" and model.op.gas_volume_fraction < 1.0:
         liquid.fill_at_close(model, k, V, y, acc)
     elif kind == "close" and model.oil:
+        # the oil enters at its injection temperature, its energy's datum: mass only
         mo = model.op.oil_mass_ratio * y[:, k]
-        ho = 0.0 * mo  # at the injection temperature, the oil's energy datum
         y[:, 2 * n + k] += mo
-        y[:, 3 * n + k] += ho
         acc[:, c.oil_m_in] += mo
-        acc[:, c.oil_h_in] += ho
     elif kind == "open" and model.ports.model == "ideal":
         _equalise(model, k, _gas_volume(model, V, y, k), y, acc)
 

@@ -123,11 +123,10 @@ def fill_at_close(model, k: int, V: float, y: np.ndarray, acc: np.ndarray) -> No
     acc[:, ACC_M_SUC] -= (1.0 - beta) * m
     acc[:, ACC_H_SUC] -= (1.0 - beta) * (U + p * Vg)
     ml = (1.0 - beta) * Vg / inv
-    hl = 0.0 * ml  # at the inlet temperature, the liquid's energy datum
+    # its energy is 0 at the inlet temperature (the datum): only its flow work is booked
     y[:, 2 * n + k] += ml
-    y[:, 3 * n + k] += hl
     acc[:, c.oil_m_in] += ml
-    acc[:, c.oil_h_in] += hl + p * (1.0 - beta) * Vg
+    acc[:, c.oil_h_in] += p * (1.0 - beta) * Vg
 
 
 def inlet_mass_ratio(op, rho_g_suction: float) -> float:

@@ -9,6 +9,8 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+# pytest processes for `make test` (pytest-xdist; `auto`: one per core)
+TEST_WORKERS ?= auto
 NUMBA_STAMP := $(VENV)/.numba-cache
 CASE ?= examples/default.toml
 SWEEP ?= examples/lambda_wrap_sweep.toml
@@ -58,11 +60,12 @@ export: $(STAMP) ## solids and machining files of a case: make export CASE=... (
 	$(VENV)/bin/rotorflow export $(CASE) --out build/$(basename $(notdir $(CASE)))/export
 
 test: $(STAMP) openfoam ## set up, then run the tests (all tiers but slow)
-	@# numba's cache is filled on the second core while pytest runs on the first (a
-	@# fresh clone would otherwise wait ~80 s for it); tests that need it before it is
-	@# ready compile it themselves, the others run in numpy until it is there
+	@# numba's cache is filled beside the tests (a fresh clone would otherwise wait ~80 s
+	@# for it); tests that need it before it is ready compile it themselves, the others
+	@# run in numpy until it is there.  The tests run on TEST_WORKERS processes (xdist),
+	@# a test file to a process, so that a file's module fixtures are built once.
 	$(MAKE) --no-print-directory $(NUMBA_STAMP) > $(VENV)/numba-cache.log 2>&1 &
-	$(PY) -m pytest -m "not slow" --durations=20 $(PYTEST_ARGS)
+	$(PY) -m pytest -m "not slow" -n $(TEST_WORKERS) --dist loadfile --durations=20 $(PYTEST_ARGS)
 
 lint: $(STAMP) ## ruff over the whole tree
 	$(VENV)/bin/ruff check .

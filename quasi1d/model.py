@@ -45,6 +45,7 @@ from rotorflow.errors import CaseError
 from . import events, flows, kernel, liquid
 from .chamber import ChamberGeometry
 from .fluids import suction_given
+from .heat import WALL_AREA_FACTOR, WallHeat, wall_heat
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_Q, ACC_W, AccColumns, Segment, segments
 from .oil import flooded_discharge_T, node_loads, oil_leak_balances, slot_balances
 from .oil import leakage as oil_leakage
@@ -58,9 +59,6 @@ from .settings import Leakage, Operating, Ports
 IDEAL_PORT_RELAXATION_RAD = 0.2
 
 _NO_WALL = np.empty(0)  # the compiled right-hand side's "no heat transfer"
-
-# Wall area of a chamber for heat transfer: that of a cube of the same volume, 6 V^(2/3).
-WALL_AREA_FACTOR = 6.0
 
 
 @dataclass(frozen=True)
@@ -94,6 +92,7 @@ class ChamberModel:
     # 1 / the liquid's density (0: no volume) and its mass per gas mass (.liquid)
     inv_rho_liquid: float = 0.0
     liquid_ratio: float = 0.0
+    heat: WallHeat = WallHeat(0.0, "none", 0.0)  # the walls' heat-transfer law (.heat)
     cache: dict = field(default_factory=dict, repr=False, compare=False)
     # the compiled right-hand side ("kernel", set by the cycle solver) and its arguments
     fast: dict = field(default_factory=dict, repr=False, compare=False)
@@ -174,9 +173,8 @@ class ChamberModel:
             if seg.cou_gap.size:
                 # Couette flow: half the tip speed times the gap along each line
                 cou = (self.wall_speed * seg.cou_gap) * links
-            wall = None
-            if self.op.heat_transfer_W_m2K > 0.0:
-                wall = self.op.heat_transfer_W_m2K * WALL_AREA_FACTOR * V ** (2.0 / 3.0)
+            # h A of a constant h (None: no heat, or h from the gas's state, in rhs)
+            wall = self.heat.conductance(V) if self.heat.on and self.heat.constant else None
             g = (V, 1.0 / V, dV, self.geo.omega_outer * dV, area, cou, wall)
             if not multi:
                 self.cache[key] = g
@@ -297,9 +295,8 @@ class ChamberModel:
         w = self.inv_omega
         acc0 = self.nv * n
         dy, pdV = kernel.balances(F, E, seg.mm, seg.me, seg.mg, p, dV, n, acc0 + ACC_W)
-        q = None
-        if wall is not None:
-            q = wall * (self.op.wall_temperature_K - T)
+        q = self.heat.rate(V, wall, rho, T)  # (seed 003 Eq. 6's Q; None: adiabatic)
+        if q is not None:
             dy[:, acc0 + ACC_Q] = q.sum(axis=1) * w
         if self.oil:
             op, mo, Ho = self.op, y[:, 2 * n:2 * n + na], y[:, 3 * n:3 * n + na]
@@ -330,7 +327,7 @@ class ChamberModel:
         key = ("fused", seg.index)
         if key not in self.fast:
             args = None
-            if kernel.fusable(self, seg):
+            if kernel.fusable(self, seg) and self.heat.constant:  # (h from T: numpy only)
                 nf = seg.ia.size
                 fanno, zeta, x_choke = np.zeros(nf, bool), np.zeros(nf), np.zeros(nf)
                 for grp in seg.groups:
@@ -356,7 +353,7 @@ class ChamberModel:
             return None
         key = ("geometry", seg.index)
         if key not in self.fast:
-            heat = self.op.heat_transfer_W_m2K * WALL_AREA_FACTOR
+            heat = self.heat.coefficient * WALL_AREA_FACTOR
             self.fast[key] = (self.geo.nodes, self.geo.coef, seg.kP,
                               kernel.scatter(seg.area), heat, self.geo.omega_outer,
                               self.n, seg.n_act, self.op.wall_temperature_K,
@@ -447,4 +444,5 @@ def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Port
     return ChamberModel(geo, fluid, op, leak, ports, suc, dis, n, nv, laws, acc, segs,
                         suc.rho * geo.v_max, op.p_suction_Pa * geo.v_max,
                         hasattr(fluid, "gamma"), 1.0 / geo.omega_outer,
-                        1.0 / op.liquid_density_kg_m3 if op.liquid_density_kg_m3 else 0.0, ratio)
+                        1.0 / op.liquid_density_kg_m3 if op.liquid_density_kg_m3 else 0.0, ratio,
+                        wall_heat(op, geo))

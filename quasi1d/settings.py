@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 from rotorflow.errors import CaseError
 
+from . import heat
 from .keys import _bool, _check_keys, _choice, _number
 from .liquid import parse_keys
 from .perfect_gas import PerfectGas
@@ -87,6 +88,7 @@ class Operating:
     discharge_early_opening_rad: float = 0.0
     T_wall_K: float | None = None  # None: equal to T_suction_K
     heat_transfer_W_m2K: float = 0.0  # 0: adiabatic chambers (seed 001 neglects heat transfer)
+    heat_transfer_correlation: str = "none"  # or h from a named correlation (.heat)
     heat_capacity: str = "temperature"  # ideal-gas "air" only: cp(T), or "constant"
     molar_mass_kg_mol: float = AIR_MOLAR_MASS_G_MOL * 1e-3  # heat_capacity "constant" only
     cp_J_kgK: float = AIR_CP_J_KGK  # heat_capacity "constant" only
@@ -107,8 +109,8 @@ class Operating:
     KEYS = (
         "p_suction_bar", "p_discharge_bar", "T_suction_K", "speed_rpm", "fluid",
         "volume_ratio", "suction_close_deg", "discharge_open_deg", "T_wall_K",
-        "discharge_early_opening_deg",
-        "heat_transfer_W_m2K", "heat_capacity", "molar_mass_g_mol", "cp_J_kgK",
+        "discharge_early_opening_deg", "heat_transfer_W_m2K", "heat_transfer_correlation",
+        "heat_capacity", "molar_mass_g_mol", "cp_J_kgK",
         "oil_mass_ratio", "T_oil_K", "oil_cp_J_kgK", "oil_time_constant_ms", "suction_quality",
         "liquid_density_kg_m3", "gas_volume_fraction", "liquid_cp_J_kgK",
         "driven",  # a geometry key that the case file keeps in [operating]; not used here
@@ -203,7 +205,7 @@ class Operating:
             discharge_open_rad=do,
             discharge_early_opening_rad=early,
             T_wall_K=None if Tw is None else _number(d, "T_wall_K", s, where, positive=True),
-            heat_transfer_W_m2K=_number(d, "heat_transfer_W_m2K", s, where, 0.0, nonnegative=True),
+            **heat.parse_keys(d, s, where),
             heat_capacity=heat_capacity,
             molar_mass_kg_mol=1e-3 * _number(d, "molar_mass_g_mol", s, where,
                                              AIR_MOLAR_MASS_G_MOL, positive=True),

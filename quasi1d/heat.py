@@ -20,16 +20,20 @@ The coefficient h (``[operating]`` keys, :func:`parse_keys`):
         Nu = h D_h / k = 0.023 Re^0.8 Pr^n,   Re = rho w D_h / mu,
         n = 0.3 (the gas cooled by the walls), 0.4 (heated).
 
-    This is the correlation the screw-machine model of seed 003's own software uses for
-    the working chamber (Stosic, Smith & Kovacevic 2005, *Screw Compressors:
-    Mathematical Modelling and Performance Calculation*, Springer, ch. 3: seed 003's
-    reference [3], the "standard version of screw compressor design software" that the
-    seed says accounts for the pump's heat transfer), with the chamber's relative
-    velocity w taken as the rotors' tip speed: the gas is carried by the rotors past
-    the static casing, and in a closed chamber of a pump there is no other velocity
-    scale (its axial transport speed, lead times speed, is ~1/3 of the tip speed in
-    examples/screw_pump_vacuum.toml).  D_h = 4 V / A_w with the same A_w as above, so
-    that area and diameter describe one shape.  mu(T) by Sutherland's law and
+    Screw-machine chamber models use correlations of this form for the working chamber
+    (Stosic, Smith & Kovacevic 2005, *Screw Compressors: Mathematical Modelling and
+    Performance Calculation*, Springer, ch. 3, seed 003's reference [3]: cited from
+    memory, its constants and velocity scale not checked against the book), here with
+    the chamber's relative velocity w taken as the rotors' tip speed: the gas is carried
+    by the rotors past the static casing, and in a closed chamber of a pump there is no
+    other velocity scale (its axial transport speed, lead times speed, is ~1/3 of the
+    tip speed in examples/screw_pump_vacuum.toml).  Tried on the vacuum pump of seed 003
+    Table 2 it made the figures worse (power +20..47 % against +18..29 % with the
+    example's constant h, and discharge temperatures far higher: at 0.01 bar h ~ 2
+    W/m2K leaves the shaft power with the tiny delivered flow), so the example keeps
+    its constant h; the correlation is an option, not the default.
+    D_h = 4 V / A_w with the same A_w as above, so that area and diameter describe one
+    shape.  mu(T) by Sutherland's law and
     k = mu cp / Pr of :class:`.perfect_gas.PerfectGas` (air); n is chosen per state from
     the sign of T_w - T, which is where h is multiplied by zero anyway.
 

@@ -86,3 +86,78 @@ def test_chamber_section_tables_sum_to_the_free_area():
     free = p.working_area - p.male.area - p.female.area
     # Every part of every section is booked to exactly one chamber's node.
     assert area.reshape(-1, ppp).sum(0) == pytest.approx(np.full(ppp, free), rel=1e-7)
+
+
+@functools.cache
+def pin_cycloid():
+    """The pin-cycloid pair of examples/twin_screw_4_6.toml (female lands 0.44 rad wide
+    on its bore, the male's tip an arc within a micron of its bore for 0.004 rad)."""
+    from rotorflow.workflow.case import load_case
+
+    from .conftest import CASES
+
+    return load_case(CASES / "twin_screw_4_6.toml").pair
+
+
+def _unbalanced(p, psi):
+    """Largest force and torque per unit pressure left on either rotor by all the parts
+    of the section at psi, against the largest part's force (and it times the radius)."""
+    parts = p.cutter.cut(float(psi))
+    force = sum(q.force for q in parts)
+    torque = sum(q.torque for q in parts)
+    largest = max(np.abs(q.force).max() for q in parts)
+    return np.abs(force).max() / largest, np.abs(torque).max() / (largest * p.male_radius)
+
+
+def test_uniform_pressure_loads_no_rotor_as_the_pin_cycloid_tip_passes_the_top_cusp():
+    """The male tip and the female land's corner reach the top cusp together (closed
+    form below).  In the 0.0052 rad before, the female land lies across the lens from
+    its contact with the male to the cusp in one chord; its wetted arc there was taken
+    for the bore, and 29 % of the largest part's force was left on the female (22 % of
+    the largest female part's).  In the 0.004 rad after, a cut 0.2 um under the bore
+    0.0024 rad behind the male tip did not reach the tip (its band near the bore was
+    read off the samples, 0.1 mm apart): 0.12 mm of the male arc went to nobody (0.15
+    %).  Every rotor boundary is wetted all round, so at one pressure nothing is left:
+    0.006 rad either side of those windows, every 2.5e-4 rad."""
+    p = pin_cycloid()
+    event = (math.atan2(p.cusp[1], p.cusp[0]) - p.tip_angle(0)) % p.period
+    for psi in event + np.arange(-0.012, 0.010, 2.5e-4):
+        force, torque = _unbalanced(p, psi)
+        # rounding (1e-16 measured); the ends of a lens across a band differ by up
+        # to 5e-6 of the radius (test_uniform_pressure_loads_no_rotor_in_any_section)
+        assert force < 2e-5 and torque < 2e-5, (psi - event, force, torque)
+
+
+def test_chamber_polygons_of_nanometre_slivers():
+    """Where the female groove is born as a sliver (2.1215 deg after the table's birth
+    node) the cut holds a piece a few nanometres across whose area rounded to zero about
+    the axis: its centroid was NaN and chamber_polygons raised (a male one at psi =
+    1.3138).  Every piece of the section is booked to exactly one chamber, so the
+    chambers' polygons at one angle fill the free area (the polygons alone: up to the
+    rotors' growth and the chords' slivers, 2e-5 of it)."""
+    from rotorflow.geometry.twin_screw.ages import centroid
+    from rotorflow.geometry.twin_screw.section import _beta0
+
+    p = pin_cycloid()
+    free = p.working_area - p.male.area - p.female.area
+    for phi in (p.section(24).phi_i + math.radians(2.1215), 1.3138296457087806):
+        rings = [q for k in range(-12, 13) for q in p.chamber_polygons(phi + k * p.period)]
+        assert all(np.all(np.isfinite(centroid(q))) for q in rings)
+        area = sum(abs(0.5 * np.sum(q[:, 0] * np.roll(q[:, 1], -1)
+                                    - np.roll(q[:, 0], -1) * q[:, 1])) for q in rings)
+        assert area == pytest.approx(free, rel=1e-4)
+        base = -_beta0(p)
+        residue = base + (phi - base) % p.period
+        assert len(rings) == sum(len(q.polygons) for q in p.cutter.cut(float(residue)))
+
+
+def test_centroid_of_a_tiny_ring_far_from_the_origin():
+    """A triangle's centroid is its vertices' mean, however small and far out; a ring of
+    collinear vertices (no area) is located by that mean too."""
+    from rotorflow.geometry.twin_screw.ages import centroid
+
+    tri = np.array([[41.641871265769, -15.062076148391], [41.641871708632, -15.062075865269],
+                    [41.641870036125, -15.062076922655]]) * 1e-3
+    assert np.allclose(centroid(tri), tri.mean(0), rtol=0.0, atol=1e-3 * np.ptp(tri))
+    line = np.array([[0.04, 0.01], [0.041, 0.011], [0.042, 0.012]])
+    assert np.allclose(centroid(line), line.mean(0), rtol=0.0, atol=1e-15)

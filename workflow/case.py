@@ -176,11 +176,17 @@ def _sweep_law(data: dict, path: Path, pair: RotorPair):
         scale_end = number(s, "diameter_end_mm", where) * 1e-3 / diameter
         if not 0.0 < scale_end <= 1.0:
             raise CaseError(f"diameter_end_mm must lie in (0, diameter_mm] in {where}")
-        lead_ratio = number(s, "lead_ratio", where) if "lead_ratio" in s else 1.0
+    elif "diameter_end_mm" in s:
+        raise CaseError(f"diameter_end_mm belongs to a conical sweep in {where}")
+    # The variable-lead law (lead linear along z, geometry.sweep) serves helical rotors
+    # of any family too: the mating rotor's twist is its speed ratio times the
+    # reference rotor's, so the pair meshes in every section whatever the law.
+    if "lead_ratio" in s:
+        if kind == "straight":
+            raise CaseError(f"a straight sweep has no lead (lead_ratio) in {where}")
+        lead_ratio = number(s, "lead_ratio", where)
         if not lead_ratio > 0.0:
             raise CaseError(f"lead_ratio must be positive in {where}")
-    elif "diameter_end_mm" in s or "lead_ratio" in s:
-        raise CaseError(f"diameter_end_mm and lead_ratio belong to a conical sweep in {where}")
     return kind, wrap, wrap_bar, scale_end, lead_ratio
 
 

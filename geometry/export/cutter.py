@@ -388,7 +388,8 @@ def default_setup(pair, sweep, angle: float | None, centre: float | None,
     sits at the pair's diameter from the rotor axis unless ``centre`` is given."""
     if sweep.kind == "conical" or abs(sweep.lead_ratio - 1.0) > 1e-12:
         raise CaseError("a form cutter needs a rotor of constant section and lead "
-                        "(straight or helical sweep); this rotor is conical")
+                        "(straight or helical sweep); this rotor is "
+                        + ("conical" if sweep.kind == "conical" else "of variable lead"))
     cut = pair.rotors[-1] if rotor is None else pair.rotor(rotor)
     k = cut.speed_ratio * sweep.wrap / sweep.length
     r_pitch = cut.pitch_radius

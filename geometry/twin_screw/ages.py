@@ -106,9 +106,19 @@ class GrooveAges:
 
 
 def centroid(ring):
-    """Centroid of the region a closed ring bounds (either orientation)."""
-    x, y = ring[:, 0], ring[:, 1]
+    """Centroid of the region a closed ring bounds (either orientation).
+
+    Taken about the ring's first vertex: about the axis, a section's sliver a few
+    nanometres across (Clipper's pieces between chords that cross along a band, as where
+    the pin-cycloid's female groove is born) has cross products of 1e-3 m^2 whose
+    rounding (3e-19 m^2) swamps its area (3e-21 m^2), which came out exactly zero and
+    the centroid NaN.  A ring that still encloses nothing (collinear vertices on Clipper's
+    grid) is located by its vertices' mean: the age asks only where it lies."""
+    origin = ring[0]
+    x, y = ring[:, 0] - origin[0], ring[:, 1] - origin[1]
     x2, y2 = np.roll(x, -1), np.roll(y, -1)
     c = x * y2 - x2 * y
     a = 0.5 * c.sum()
-    return np.array([((x + x2) * c).sum(), ((y + y2) * c).sum()]) / (6.0 * a)
+    if a == 0.0:
+        return ring.mean(0)
+    return origin + np.array([((x + x2) * c).sum(), ((y + y2) * c).sum()]) / (6.0 * a)

@@ -34,8 +34,9 @@ EDGE_XTOL = 1e-14
 
 
 def contact_line_length(pair, arcs, sweep, theta: float) -> float:
-    """Length of the whole interlobe contact line at male angle ``theta`` (constant-lead
-    helical or straight sweep; ``arcs``: the rack that generated ``pair``)."""
+    """Length of the whole interlobe contact line at male angle ``theta`` (straight or
+    helical sweep, constant or variable lead; ``arcs``: the rack that generated
+    ``pair``)."""
     return float(contact_line_lengths(pair, arcs, sweep, [theta])[0])
 
 
@@ -69,18 +70,20 @@ def _arc_length(pair, arc, sweep, theta, t, psi, inside, period) -> float:
         # Straight: every contact of the section runs the whole length.
         return _count_contacts(psi, inside, theta, period) * sweep.length
     total = 0.0
-    rate = sweep.wrap / sweep.length  # twist per length
     k_lo = math.floor((psi.min() - theta) / period) - 1
     k_hi = math.ceil((psi.max() - theta + sweep.wrap) / period) + 1
     for k in range(k_lo, k_hi + 1):
-        z = (theta - psi + k * period) / rate
+        # twist(z) = theta - s / r1 + k period, inverted by the sweep's own law (a
+        # constant or a variable lead)
+        z = sweep.z_of_twist(theta - psi + k * period)
 
         def z_at(u, k=k):
-            return (theta - rack_shift(arc, np.array([u]))[0][0] / r1 + k * period) / rate
+            twist = theta - rack_shift(arc, np.array([u]))[0][0] / r1 + k * period
+            return float(sweep.z_of_twist(twist))
 
         ok = inside & (z >= 0.0) & (z <= sweep.length)
         for lo, hi in _runs(t, ok, z, z_at, sweep.length):
-            total += _branch_length(pair, arc, lo, hi, rate)
+            total += _branch_length(pair, arc, lo, hi, sweep, theta + k * period)
     return total
 
 
@@ -112,8 +115,9 @@ def _edge(ta, tb, za, zb, z_at, length, fallback):
     return fallback
 
 
-def _branch_length(pair, arc, lo, hi, rate) -> float:
-    """Length of the space curve (X(t), z(t)) for t in [lo, hi] (Gauss-Legendre)."""
+def _branch_length(pair, arc, lo, hi, sweep, shift) -> float:
+    """Length of the space curve (X(t), z(t)) for t in [lo, hi] (Gauss-Legendre), where
+    twist(z(t)) = shift - s(t) / r1."""
     x, w = np.polynomial.legendre.leggauss(GAUSS_NODES)
     edges = np.linspace(lo, hi, GAUSS_PANELS + 1)
     t = (0.5 * (edges[:-1, None] + edges[1:, None])
@@ -121,9 +125,9 @@ def _branch_length(pair, arc, lo, hi, rate) -> float:
     wt = (0.5 * np.diff(edges)[:, None] * w[None, :]).ravel()
     r1 = pair.gearing.r1
     q1 = arc.eval(t, 1)
-    _, ds = rack_shift(arc, t)
+    s, ds = rack_shift(arc, t)
     dx = np.stack([q1[:, 0], q1[:, 1] + ds], -1)
-    dz = (ds / r1) / rate
+    dz = (ds / r1) / sweep.dtwist(sweep.z_of_twist(shift - s / r1))
     return float(np.sum(np.sqrt(np.sum(dx * dx, -1) + dz * dz) * wt))
 
 

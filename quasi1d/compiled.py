@@ -75,8 +75,16 @@ def _cache_dir() -> Path:
 
 
 def _cached() -> bool:
-    """numba's cache holds the compiled function (without importing numba)."""
-    return all(any(_cache_dir().glob(f"**/*{fn.__name__}*.nbi")) for fn in _entries())
+    """numba's cache holds the compiled function for this checkout (without importing
+    numba).  numba files a function's cache under ``<dir name>_<sha1 of the dir's
+    path>`` of its source: another checkout of the same sources has the same
+    :func:`_cache_dir` but not its entries, and taking them for its own made a point
+    compile for ~80 s inside its time budget."""
+    from . import kernel
+
+    src = os.path.dirname(os.path.abspath(kernel.__file__))
+    where = _cache_dir() / f"{os.path.basename(src)}_{hashlib.sha1(src.encode()).hexdigest()}"
+    return all(any(where.glob(f"*{fn.__name__}*.nbi")) for fn in _entries())
 
 
 def _entries():

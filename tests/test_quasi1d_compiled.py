@@ -210,3 +210,30 @@ def test_importing_the_model_does_not_load_numba():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_the_cache_is_taken_as_filled_only_under_this_checkouts_own_folder(monkeypatch, tmp_path):
+    """numba files each source directory's cache under its own sub-folder (its locator,
+    asked here, is the independent construction): another checkout's entries of the same
+    sources must not count, or a point would compile inside its time budget."""
+    from numba.core.caching import UserProvidedCacheLocator
+
+    compiled._cache_dir.cache_clear()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    try:
+        root = compiled._cache_dir()
+        own = root / UserProvidedCacheLocator.get_suitable_cache_subpath(kernel.__file__)
+        other = root / "quasi1d_0123456789abcdef0123456789abcdef01234567"
+        names = [f"kernel.{fn.__name__}-1.py311.nbi" for fn in compiled._entries()]
+        other.mkdir(parents=True)
+        for n in names:
+            (other / n).touch()
+        assert not compiled._cached()
+        own.mkdir()
+        for n in names[:-1]:
+            (own / n).touch()
+        assert not compiled._cached()
+        (own / names[-1]).touch()
+        assert compiled._cached()
+    finally:
+        compiled._cache_dir.cache_clear()

@@ -17,10 +17,12 @@ MODULES = (
     "bench.bench_solids",
     "bench.bench_cfd",
     "bench.bench_cfd3d",
+    "bench.bench_cfd_moving",
     "bench.bench_workflow",
     "bench.bench_process",
     "bench.bench_optimise",
     "bench.bench_pump_vacuum",
+    "bench.bench_pump_multiphase",
 )
 
 

@@ -60,16 +60,23 @@ def _flat(errors: dict) -> dict:
     return {f"{c}.{k}": v for c, e in errors.items() for k, v in e.items()}
 
 
-@pytest.mark.skipif(not RECORD.is_file(), reason="no recorded moving-section comparison")
-def test_the_recorded_comparison_is_what_its_data_give():
-    rec = json.loads(RECORD.read_text())
+#: Recorded runs (tests/data/cfd/moving/record.py) and their written angles: every 0.5 deg
+#: over the lobe period at 100 um, over its first 20 deg at the real 20 um.
+RECORDS = {RECORD: 121, RECORD.parent / "span20deg_20um.json": 41}
+
+
+@pytest.mark.parametrize("record", list(RECORDS), ids=lambda p: p.stem)
+def test_the_recorded_comparison_is_what_its_data_give(record):
+    if not record.is_file():
+        pytest.skip(f"no recorded moving-section comparison {record.name}")
+    rec = json.loads(record.read_text())
     run = rec["cfd"]
     assert run["status"] == "completed"
     # the closed section's mass (CFD: its own table; the model: by construction)
     assert run["mass_drift"] <= 1e-8
     assert run["max_courant"] <= 1.0
     cfd = run["chambers"]
-    assert len(cfd["angles_deg"]) == 121  # every 0.5 deg over the lobe period
+    assert len(cfd["angles_deg"]) == RECORDS[record]
     for m in rec["models"].values():
         assert m["mass_drift"] <= 1e-12
         assert _flat(compare(cfd, np.asarray(m["p"]))) == pytest.approx(_flat(m["errors"]),

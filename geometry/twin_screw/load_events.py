@@ -7,7 +7,8 @@ changes hands (:mod:`..load_sweep` integrates them piecewise between these event
 * a band, where the contact jumps along an arc (:func:`.track_ends.contact_breaks`);
 * a lobe's last point on its bore reaching a cusp: the tip point, or a land's corners
   (the pin-cycloid female's tip is an arc on its bore 0.44 rad wide), in closed form as
-  the rotor turns at a constant rate;
+  the rotor turns at a constant rate; and the end of a tip's band (:mod:`.tip_bands`)
+  crossing the cusp line, where a cut there stops ending at the tip;
 * an interlobe contact crossing the cusp line, which splits the section into male and
   female groove parts (the root of x(psi) - x_c along the contact).
 
@@ -33,7 +34,8 @@ import numpy as np
 
 from ..load_sweep import LoadEvents
 from .lands import find_land
-from .regions import FEMALE, MALE
+from .regions import FEMALE, GROW, MALE
+from .tip_bands import TIP_BAND
 from .track_ends import _cusp_line_cut
 
 #: Angle (rad) about an event over which the section's nodes are not trusted.  The
@@ -57,6 +59,12 @@ LENS_SHADOW = 0.01
 #: the passage (4e-4 moves between the chamber and its male groove's previous life),
 #: which is still the resolution's: so the shadow stays.
 TIP_SHADOW = 0.015
+#: The same about a tip band's end crossing the cusp line (:func:`_bore_ends`).  The
+#: closed form puts the grown rotor's band end on the line; the cut's polygon lies
+#: inside the grown curve by up to its chord error (1e-6 C), which moves the crossing by
+#: ~2e-6 rad (the pin-cycloid male: the jump found 1.0e-6 rad before the closed form);
+#: 1e-5 keeps any node out of that window.
+BAND_SHADOW = 1e-5
 #: The pieces' data lie at least this far apart (:class:`..load_sweep.LoadEvents`): a
 #: node spacing on the finest grids that matter at all (192 points per period, twice
 #: for the sections), so that these and finer grids carry a piece across a shadow from
@@ -106,9 +114,8 @@ def _phases(pair, psi, tracks) -> list[tuple[float, float, float]]:
     for phase, length, _, shadow in pair.contact_breaks:
         if length > 0.0:  # a band (a joint only turns the contact's rate: a kink)
             found.append((phase % period, shadow, shadow))
-    for phase, top in _bore_ends(pair):
-        # the mesh side: a tip comes out of the mesh at the top cusp, goes in at the bottom
-        found.append((phase % period, TIP_SHADOW if top else 0.0, 0.0 if top else TIP_SHADOW))
+    for phase, before, after in _bore_ends(pair):
+        found.append((phase % period, before, after))
     # A crossing's shadow spans both sides: its walls beyond the cusp line carry power
     # (their chamber's area grows by the sliver) but are not resolved for the lens's
     # length either way; taking them to arrive at the crossing leaves the circular
@@ -131,10 +138,10 @@ def _phases(pair, psi, tracks) -> list[tuple[float, float, float]]:
     return [tuple(m) for m in merged]
 
 
-def _bore_ends(pair) -> list[tuple[float, bool]]:
-    """(male angle, whether at the top cusp) at which a lobe's last point on its bore
+def _bore_ends(pair) -> list[tuple[float, float, float]]:
+    """(male angle, shadow before, shadow after) at which a lobe's last point on its bore
     reaches a cusp: its tip point, or either corner of a land (whichever trails seals
-    until it passes)."""
+    until it passes); and at which the end of a tip's band crosses the cusp line."""
     g = pair.gearing
     xc, yc = pair.cusp
     out = []
@@ -150,7 +157,36 @@ def _bore_ends(pair) -> list[tuple[float, bool]]:
             alpha = math.atan2(p[1], p[0])  # own frame, about the rotor's axis
             for y in (yc, -yc):
                 gamma = math.atan2(y - axis[1], xc - axis[0])
-                out.append(((gamma - alpha) / speed, y > 0.0))
+                # the mesh side: a tip comes out of the mesh at the top cusp, goes in
+                # at the bottom
+                shadow = (TIP_SHADOW, 0.0) if y > 0.0 else (0.0, TIP_SHADOW)
+                out.append(((gamma - alpha) / speed, *shadow))
+        if land is None:  # (a land's band ends are its corners, found above)
+            out.extend(_band_ends(pair, rotor, axis, speed))
+    return out
+
+
+def _band_ends(pair, rotor, axis, speed) -> list[tuple[float, float, float]]:
+    """A cut at the cusp line that ends on a tip's band ends at the tip (:meth:`.tip_bands
+    .TipBands._in_tip_band`); once the band's end has crossed the line, at the cut
+    point.  The rotor's arc between the two changes parts there: 1.6e-4 (per unit
+    pressure and length) of the pin-cycloid male's, 0.0038 rad after its tip leaves
+    the top cusp.  The band's end is where the profile comes within TIP_BAND of its bore
+    (radius R - TIP_BAND C), the cut sees it grown by GROW C: at radius r about the
+    axis O it is on the line x = x_c at polar angle +-acos((x_c - O_x) / r).  Ends within
+    SAME_EVENT of the tip are the tip's own event."""
+    cutter = pair.cutter
+    c = pair.gearing.centre_distance
+    tip = pair.tip_points(pair.male if rotor == MALE else pair.female)[0]
+    radius = cutter.R[rotor] - (TIP_BAND - GROW) * c
+    gamma = math.acos((pair.cusp[0] - axis[0]) / radius)
+    out = []
+    for off in cutter.tip_band(rotor):
+        if abs(off) < SAME_EVENT:
+            continue
+        alpha = math.atan2(tip[1], tip[0]) + off
+        for side in (1.0, -1.0):
+            out.append(((side * gamma - alpha) / speed, BAND_SHADOW, BAND_SHADOW))
     return out
 
 

@@ -47,6 +47,10 @@ class TipBands:
                              2.0 * math.pi)
         return lo <= off <= hi
 
+    def tip_band(self, r) -> tuple[float, float]:
+        """Rotor r's band about its tip: the polar angles of its ends from the tip's."""
+        return self._tip_bands[r]
+
     @cached_property
     def _tip_bands(self):
         """Per rotor, the polar angles (from its tip's) between which its profile lies

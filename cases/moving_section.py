@@ -98,10 +98,10 @@ def interval_minimum(f0: np.ndarray, fm: np.ndarray, f1: np.ndarray) -> np.ndarr
     b = 4.0 * fm - 3.0 * f0 - f1
     a = 2.0 * f0 + 2.0 * f1 - 4.0 * fm
     low = np.minimum(f0, f1)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):  # a = 0: no interior minimum
         t = -b / (2.0 * a)
-    inside = (a > 0.0) & (t > 0.0) & (t < 1.0)
-    return np.where(inside, np.minimum(low, f0 + b * t + a * t * t), low)
+        inside = (a > 0.0) & (t > 0.0) & (t < 1.0)
+        return np.where(inside, np.minimum(low, f0 + b * t + a * t * t), low)
 
 
 def _areas(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -97,13 +97,14 @@ def study(runs: Path, steps: int = 288, span_deg: float = 30.0) -> Path:
     return path
 
 
-def clearance_20um(runs: Path, span_deg: float = 20.0, steps: int = 96) -> Path:
+def clearance_20um(runs: Path, span_deg: float = 20.0, steps: int = 144) -> Path:
     """The real clearance: 20 um needs 1024 columns (512 leave the walls 0.89 first-cell
     heights off their chords at 20-40 deg, limit 0.5) and key frames every 0.0625 deg (at
     0.125 deg the interpolated walls are 1.74 um off, 8.7 % of the clearance, limit 5 %);
-    96 steps per frame (the 100 um run's step halved for the finer columns) keep the
-    gap's Courant number below 1.  The first ``span_deg`` of the lobe period
-    (a whole period: ~1 h 10 min of solver on one core)."""
+    at 96 steps per frame (the 100 um run's step halved for the finer columns) the
+    gap's Courant number reached 1.37 (4,096 cells, 30,720 steps, 1,314 s: judged
+    inconsistent, not recorded); 144 should bring it to ~0.91.  The first ``span_deg``
+    of the lobe period (a whole period at 144: ~1 h of solver on one core)."""
     s = MovingSection(examples()["table1"], 20e-6, OGridSpec(columns=1024, cells_across_gap=4),
                       math.radians(13.0), math.radians(span_deg), int(round(span_deg * 16)),
                       2500.0 * 2.0 * math.pi / 60.0)

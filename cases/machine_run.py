@@ -113,7 +113,7 @@ def case_key(m: FrozenMachine, controls: Controls) -> str:
     return foam_case.digest({
         "format": CASE_FORMAT, "pair": m.pair.digest(),
         "sweep": [sweep.kind, sweep.length, sweep.wrap, sweep.scale_end, sweep.lead_ratio],
-        "phi": m.phi, "gap": m.gap, "layers": m.layers, "spec": asdict(m.spec),
+        "phi": m.phi, "gap": m.gap, "layers": m.layers, "spec": m.spec.key(),
         "end_layer": m.end_layer, "ports": ports.hexdigest(),
         "plenums": [m.p_suction, m.p_discharge, m.T_suction, m.T_discharge],
         "omega": m.omega_outer, "gas": asdict(m.gas), "moving_walls": m.moving_walls,

@@ -42,7 +42,7 @@ log = logging.getLogger(__name__)
 SECTION = "cfd_machine"
 KEYS = ("angles_deg", "gap_um", "columns", "cells_across_gap", "layers", "end_layer_mm",
         "refinement_ratio", "models", "flow_coefficient", "processes", "max_iterations",
-        "moving_walls", "wall_clustering", "runs_dir")
+        "moving_walls", "wall_clustering", "even_reach", "runs_dir")
 MODELS = ("nozzle", "fanno", "cfd-calibrated", "rarefied")
 LEVELS = ("coarse", "medium", "fine")
 
@@ -67,9 +67,11 @@ class StudySettings:
     #: and the stacks pass checkMesh (skewness 3.3-3.8).
     wall_clustering: float = 3.0
     runs_dir: str | None = None
+    #: :attr:`.ogrid.OGridSpec.even_reach`: 0 keeps the tanh law in the gaps too.
+    even_reach: float = 0.0
 
     def spec(self) -> OGridSpec:
-        return OGridSpec(wall_clustering=self.wall_clustering)
+        return OGridSpec(wall_clustering=self.wall_clustering, even_reach=self.even_reach)
 
     def grids(self) -> tuple[Grid, Grid, Grid]:
         return self.coarse, self.coarse.refined(self.ratio), self.coarse.refined(self.ratio**2)
@@ -130,7 +132,8 @@ class StudySettings:
                    d.get("flow_coefficient"), number("processes", 2, whole=True),
                    number("max_iterations", cls.max_iterations, whole=True),
                    d.get("moving_walls", True),
-                   number("wall_clustering", cls.wall_clustering), d.get("runs_dir"))
+                   number("wall_clustering", cls.wall_clustering), d.get("runs_dir"),
+                   number("even_reach", 0.0) if "even_reach" in d else 0.0)
 
 
 def validate_section(data: dict, where: str, pair) -> None:

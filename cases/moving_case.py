@@ -369,7 +369,7 @@ def judge(case_dir: Path, built: Built, controls: RunControls, elapsed: float,
 
 def case_key(s: MovingSection, controls: RunControls) -> str:
     return foam_case.digest({
-        "pair": s.pair.digest(), "gap": s.gap, "spec": asdict(s.spec), "start": s.start,
+        "pair": s.pair.digest(), "gap": s.gap, "spec": s.spec.key(), "start": s.start,
         "span": s.span, "frames": s.frames, "omega": s.omega_outer, "depth": s.depth,
         "p0": s.p0, "T0": s.T0, "gas": asdict(s.gas),
         "initial_p": sorted((int(k), float(v)) for k, v in (s.initial_p or {}).items()),

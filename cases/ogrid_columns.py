@@ -91,21 +91,23 @@ def segment_columns(wall, anchor_u: np.ndarray, columns: int) -> np.ndarray:
     return counts
 
 
-def sag_columns(table, width_at, first: float) -> np.ndarray:
+def sag_columns(table, width_at, first) -> np.ndarray:
     """Cumulative count of the columns a wall needs (at its table's polar angles) for its
     chords to depart from it by at most SAG_TARGET of the first cell: a chord of length
-    L on curvature kappa sags L^2 kappa / 8, the first cell is ``first`` times the radial
-    width, so the columns per metre are sqrt(kappa / (8 SAG_TARGET first width)); kappa
-    ds is the table's turning, so a sharp edge counts by its whole turn."""
+    L on curvature kappa sags L^2 kappa / 8, the first cell is ``first`` (a share, or a
+    function of the width giving it) times the radial width, so the columns per metre
+    are sqrt(kappa / (8 SAG_TARGET first width)); kappa ds is the table's turning, so a
+    sharp edge counts by its whole turn."""
     ds = np.diff(table.arc) * table.length
     dturn = np.diff(table.turn) * table.total_turn
     mid = 0.5 * (table.ang[1:] + table.ang[:-1])
     w = np.maximum(width_at(mid), MIN_SAG_WIDTH)
-    need = np.sqrt(np.maximum(dturn * ds, 0.0) / (8.0 * SAG_TARGET * first * w))
+    share = first(w) if callable(first) else first
+    need = np.sqrt(np.maximum(dturn * ds, 0.0) / (8.0 * SAG_TARGET * share * w))
     return np.concatenate([[0.0], np.cumsum(need)])
 
 
-def segment_law(outer, inner, spec, scale: float, grid: np.ndarray, first: float = 0.0
+def segment_law(outer, inner, spec, scale: float, grid: np.ndarray, first=0.0
                 ) -> np.ndarray:
     """The clustering law on polar angles ``grid``: the walls' mean arc fraction, a share
     ``gap_clustering`` by h_ref / (h + h_ref) (h the radial width, h_ref = ``gap_reach``
@@ -138,7 +140,7 @@ def segment_law(outer, inner, spec, scale: float, grid: np.ndarray, first: float
 
 
 def column_angles(outer, inner, spec, scale: float, anchors: np.ndarray,
-                  counts: np.ndarray, first: float = 0.0) -> np.ndarray:
+                  counts: np.ndarray, first=0.0) -> np.ndarray:
     """Polar angles of the columns: ``counts[a]`` columns from anchor a (included) toward
     anchor a + 1, at equal steps of :func:`segment_law` within the segment (``first``:
     the first cell's share of the width, for the law's sag term).  ``anchors`` are the

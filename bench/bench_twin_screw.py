@@ -14,15 +14,17 @@ machine's open areas at the same angles, its sealed regions swept REFERENCE_PORT
 times per period).  Target (issue 13):
 geometry figures and table of a 4/6 pair at 1e-4 relative error in under 1 s.
 
-Last measured (loaded 2-core machine, 1 core), at 24 / 48 / 96 / 192 points per period:
-CPU 1.72 / 2.72 / 4.36 / 8.95 s (pin-cycloid), 2.42 / 3.29 / 5.24 / 10.1 s (circular);
-at 24, the least of nine runs on one core: 1.36 and 1.54 s.  Discharge areas 9.5e-5 /
-8.8e-5 / 5.5e-5 / 2.7e-5 (pin-cycloid) and 7.4e-4 / 3.5e-4 / 2.6e-4 / 1.1e-4
-(circular), suction 9.3e-5 / 8.8e-5 / 5.7e-5 / 1.8e-5 and 1.8e-4 / 8.2e-5 / 6.7e-5 /
-2.8e-5; Pi_max within 2.5e-5, V_max 1e-7, the lines 5.1e-5 (the circular's interlobe at
-24) of theirs.  So the pin-cycloid meets the error at every resolution and the time at
-none; the circular misses the error on its discharge (the sealed region's sweep,
-geometry/port_areas.py) below 192.
+Last measured (loaded 2-core machine, 1 core; another job ran on the other), at 24 / 48
+/ 96 / 192 points per period: CPU 2.21 / 2.97 / 4.36 / 9.14 s (pin-cycloid), 2.53 / 3.46
+/ 5.76 / 9.60 s (circular); at 24, the least of seven runs on one core: 1.55 and 1.90 s
+(the tree before the jumps' sweep, the same hour: 1.43 and 1.63 s, least of five).
+Discharge areas 9.5e-5 / 8.8e-5 / 5.5e-5 / 2.7e-5 (pin-cycloid) and 7.4e-4 / 3.1e-4 /
+2.6e-4 / 1.1e-4 (circular), suction 9.3e-5 / 8.8e-5 / 5.7e-5 / 1.8e-5 and 1.8e-4 /
+8.2e-5 / 6.7e-5 / 2.8e-5; Pi_max within 2.5e-5, V_max 1e-7, the lines 5.1e-5 (the
+circular's interlobe at 24) of theirs.  So the pin-cycloid meets the error at every
+resolution and the time at none; the circular misses the error on its discharge below
+192 and its suction at 24 (the sealed region's sweep, geometry/port_areas.py and the
+README: a deficit along the path of contact, cause not found).
 """
 
 from __future__ import annotations

@@ -27,7 +27,10 @@ sample's (:mod:`.footprint_events`):
   (tests/test_twin_screw_port_areas.py);
 * a pocket handed over (a family hands a trapped pocket from the dying chamber to the
   newborn one where its area is least): swept rigidly from the least area of the
-  rigidly moved pocket.
+  rigidly moved pocket;
+* a piece's end that jumps along its surface (a sliver that opens, or closes, right
+  next to its chamber, so its ring keeps matched pieces): the stretch it jumped over is
+  swept per vertex, as a sliver's (:meth:`.footprint_events.Events._jumps`).
 
 Optionally (REFINE) one more section is cut just after each event, where the sliver has
 its true extent, and the sub-steps are swept.
@@ -143,7 +146,7 @@ class Sweeper(Events):
             if prev is not None:
                 pieces += self._step(prev, cur, float(psi))
             prev = cur if cur is not None else _Empty(float(psi))
-        pieces += _bands(self._bands)
+        pieces += _bands(self._bands) + self._jumps(self._bands)
         if not pieces:
             return CrossSection()
         out = _union(pieces)
@@ -187,7 +190,7 @@ class Sweeper(Events):
                 out += self._step(prev, cur, psi, refine=False)
                 prev = cur if cur is not None else _Empty(psi)
             return out
-        self._bands += [(p, q, a.psi, psi_b) for p, q in pairs]
+        self._bands += [(p, q, a.psi, psi_b, a, b) for p, q in pairs]
         out = []
         for psi, side, kind, ring in events:
             smp, sign = (b, -1.0) if side == "born" else (a, +1.0)
@@ -245,10 +248,10 @@ def _bands(bands):
     each, joined at its ends by its corners' paths, each the parabola through the
     corner's positions at three consecutive samples (the step before or after), or the
     chord where the piece is seen at two only."""
-    before = {id(y): (x, t0) for x, y, t0, _ in bands}
-    after = {id(x): (y, t1) for x, y, _, t1 in bands}
+    before = {id(y): (x, t0) for x, y, t0, *_ in bands}
+    after = {id(x): (y, t1) for x, y, _, t1, *_ in bands}
     out = []
-    for x, y, t0, t1 in bands:
+    for x, y, t0, t1, *_ in bands:
         ends = []
         for end in (-1, 0):
             p0, p1 = x.points[end], y.points[end]

@@ -34,6 +34,11 @@ CLOSING = 0.05
 GAP_POINTS = 33
 #: Bisections of a vertex's own birth in its scan interval (to 2^-8 of it).
 BISECT = 8
+#: A piece's end that grows (or shrinks) along its surface by this many times more than
+#: in the steps before and after, and by more than JUMP_MIN of the profile's parameter
+#: (a profile segment spans 1), jumped (:meth:`Events._jumps`).
+JUMP = 4.0
+JUMP_MIN = 0.05
 
 
 class Events:
@@ -133,30 +138,96 @@ class Events:
         side = np.sign(ab[v, j, 0] * rel[:, 1] - ab[v, j, 1] * rel[:, 0]) * orient
         return side * dist[v, j]
 
+    def _jumps(self, bands):
+        """Bands of what a corner's jump exposed or covered between two samples (the
+        bands' (piece at a, piece at b, psi_a, psi_b, sample a, sample b)).
+
+        Where two rotor surfaces part along a stretch at once (the circular pair's
+        conformal arcs, 148 deg after its chamber's birth) the new sliver is joined to
+        a ring that has matched pieces, so no sliver event is seen: the pieces' end
+        jumps along the surface, and the band's chord between the two ends misses what
+        the stretch passed after it parted.  An end whose growth (in profile parameter)
+        is JUMP times its growth in the steps before and after is such a jump: each
+        vertex of the stretch is swept from where its own gap closes (:meth:`_closing`),
+        as a sliver's."""
+        before = {id(y): k for k, (x, y, *_r) in enumerate(bands)}
+        after = {id(x): k for k, (x, y, *_r) in enumerate(bands)}
+        growth = [self._growth(x, y) for x, y, *_r in bands]
+        out = []
+        for k, (x, y, *_r) in enumerate(bands):
+            near = [j for j in (before.get(id(x)), after.get(id(y))) if j is not None]
+            for end in (0, 1):
+                g = growth[k][end]
+                if near and abs(g) > max(JUMP * max(abs(growth[j][end]) for j in near),
+                                         JUMP_MIN):
+                    out += self._exposed(bands[k], end, g > 0.0)
+        return out
+
+    def _growth(self, x, y):
+        """(at lo, at hi): how far the piece at b reaches beyond the piece at a in
+        profile parameter (negative: short of it), and the shift that aligns them."""
+        n = self.periods[x.rotor]
+        s = next((s for s in (0.0, -n, n) if x.lo <= y.hi + s and y.lo + s <= x.hi), 0.0)
+        return x.lo - (y.lo + s), (y.hi + s) - x.hi, s
+
+    def _exposed(self, band, end, grew):
+        """The band a jumped end's stretch passes: the stretch at b that was not on
+        the boundary at a, back to where each of its vertices came apart from the other
+        surface (``grew``), or the stretch at a that is not at b, on to where each
+        closes."""
+        from .footprint import ring_section
+
+        x, y, t0, t1, a, b = band
+        s = self._growth(x, y)[2]
+        if grew:
+            chain, smp, sign, par, lo, hi = y, b, -1.0, y.par + s, x.lo, x.hi
+        else:
+            chain, smp, sign, par, lo, hi = x, a, 1.0, x.par - s, y.lo, y.hi
+        mask = par < lo if end == 0 else par > hi
+        if mask.sum() < 2:
+            return []
+        ring, cls = smp.rings[chain.ring]
+        pts = chain.points[mask]
+        own, found = self._closing(ring, cls, chain.rotor, pts, sign * (t1 - t0))
+        if found.sum() < 2:
+            return []
+        axis, ratio = self.surfaces.rotors[chain.rotor][:2]
+        moved = _turn((pts[found] - axis)[:, None], ratio * own[found])[:, 0] + axis
+        band = ring_section(np.concatenate([pts[found], moved[::-1]]))
+        return [] if band is None else [band]
+
+    def _closing(self, ring, cls, rotor, x, span):
+        """Per point of ``x`` (rotor ``rotor``'s, on ``ring``): the rigid move (signed,
+        within ``span``) to where its gap to the ring's other edges closes, and whether
+        it closes there.  Found on GAP_POINTS of them, scanned and bisected; the rest
+        interpolated along x."""
+        orient = 1.0 if _area(ring) > 0.0 else -1.0
+        n = len(x)
+        pick = np.unique(np.linspace(0, n - 1, min(n, GAP_POINTS)).astype(int))
+        ds = np.linspace(0.0, abs(span), 2 * EVENT_SCAN + 1) * np.sign(span)
+        g = self._gaps(ring, cls, rotor, x[pick], ds, orient)
+        crossed = (g[1:] <= 0.0) & (g[:-1] > 0.0)
+        hit = crossed.any(axis=0)
+        if not hit.any():
+            return np.full(n, span), np.zeros(n, dtype=bool)
+        first = np.argmax(crossed, axis=0)
+        lo, hi = ds[first], ds[first + 1]
+        for _ in range(BISECT):
+            mid = 0.5 * (lo + hi)
+            open_ = self._gaps_each(ring, cls, rotor, x[pick], mid, orient) > 0.0
+            lo, hi = np.where(open_, mid, lo), np.where(open_, hi, mid)
+        own = np.interp(np.arange(n), pick[hit], (0.5 * (lo + hi))[hit])
+        found = np.interp(np.arange(n), pick, hit.astype(float)) > 0.5
+        return own, found
+
     def _births(self, ring, cls, chain, dpsi) -> np.ndarray:
         """Per vertex of ``chain`` (a piece of a sliver found born or dying |dpsi| away,
         by the median of its gap), the rigid move (signed) to where its own gap closes:
         a sliver may open along its length over a while (a zipper), and the points each
         vertex passes are swept from its own opening.  Found on GAP_POINTS vertices
         (the rest interpolated along the chain), scanned over twice |dpsi| and bisected."""
-        orient = 1.0 if _area(ring) > 0.0 else -1.0
-        n = len(chain.points)
-        pick = np.unique(np.linspace(0, n - 1, min(n, GAP_POINTS)).astype(int))
-        x = chain.points[pick]
-        ds = np.linspace(0.0, 2.0 * abs(dpsi), 2 * EVENT_SCAN + 1) * np.sign(dpsi)
-        g = self._gaps(ring, cls, chain.rotor, x, ds, orient)
-        crossed = (g[1:] <= 0.0) & (g[:-1] > 0.0)
-        found = crossed.any(axis=0)
-        if not found.any():
-            return np.full(n, dpsi)
-        first = np.argmax(crossed, axis=0)
-        lo, hi = ds[first], ds[first + 1]
-        for _ in range(BISECT):
-            mid = 0.5 * (lo + hi)
-            open_ = self._gaps_each(ring, cls, chain.rotor, x, mid, orient) > 0.0
-            lo, hi = np.where(open_, mid, lo), np.where(open_, hi, mid)
-        own = 0.5 * (lo + hi)
-        return np.interp(np.arange(n), pick[found], own[found])
+        own, found = self._closing(ring, cls, chain.rotor, chain.points, 2.0 * dpsi)
+        return own if found.any() else np.full(len(chain.points), dpsi)
 
     def _rigid(self, smp, ring_index, dpsi, kind):
         """The passage of ring ``ring_index`` of ``smp`` between its event (dpsi away)

@@ -27,7 +27,7 @@ the latest figures):
     pin-cycloid  suction    9.3e-5  8.8e-5  5.7e-5  1.8e-5
                  discharge  9.5e-5  8.8e-5  5.5e-5  2.7e-5   (Hermite only: 5.4e-4 3.8e-4)
     circular     suction    1.8e-4  8.2e-5  6.7e-5  2.8e-5
-                 discharge  7.4e-4  3.5e-4  2.6e-4  1.1e-4   (Hermite only: 1.05e-3 1.56e-3)
+                 discharge  7.4e-4  3.1e-4  2.6e-4  1.1e-4   (Hermite only: 1.05e-3 1.56e-3)
 
 The circular's discharge is 7.4e-4 off at 24 with every node cut: there the sealed
 region's sweep is the limit.  On one machine (24 points per period) against its own

@@ -35,6 +35,7 @@ class Chain:
     lo: float  # profile parameter at its ends (unwrapped: lo <= hi)
     hi: float
     ring: int  # index of its ring in the sample
+    par: np.ndarray | None = None  # per point, unwrapped as lo .. hi
 
 
 class Surfaces:
@@ -131,7 +132,7 @@ def chains(ring, cls, par, periods, index) -> list[Chain]:
         pts = ring[r]
         if s[-1] < s[0]:
             s, pts = s[::-1], pts[::-1]
-        out.append(Chain(k, pts, float(s[0]), float(s[-1]), index))
+        out.append(Chain(k, pts, float(s[0]), float(s[-1]), index, s))
     return out
 
 

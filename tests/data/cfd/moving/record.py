@@ -104,8 +104,9 @@ def clearance_20um(runs: Path, span_deg: float = 20.0, steps: int = 144) -> Path
     at 96 steps per frame (the 100 um run's step halved for the finer columns) the
     gap's Courant number reached 1.37 (4,096 cells, 30,720 steps, 1,314 s: judged
     inconsistent, not recorded); 144 brought it to 0.91 (46,080 steps, 2,394 s of
-    solver, 46 min with the frames on a loaded machine: ``span20deg_20um.json``).  The first ``span_deg``
-    of the lobe period (a whole period at 144: ~1 h of solver on one core)."""
+    solver, 46 min with the frames on a loaded machine: ``span20deg_20um.json``).  The
+    first ``span_deg`` of the lobe period (a whole period at 144: ~2 h of solver on one
+    core)."""
     s = MovingSection(examples()["table1"], 20e-6, OGridSpec(columns=1024, cells_across_gap=4),
                       math.radians(13.0), math.radians(span_deg), int(round(span_deg * 16)),
                       2500.0 * 2.0 * math.pi / 60.0)

@@ -280,12 +280,12 @@ def radial_law(spec: OGridSpec, widths: np.ndarray, scale: float) -> np.ndarray:
 
 
 def _connect(p0, n0, p1, n1, s, blend):
-    """Nodes at fractions s (shared, or one row per column) on the lines from p0 (inner
-    wall) to p1 (outer wall): (columns, nodes across, 2)."""
+    """Nodes at fractions s (one row per column) on the lines from p0 (inner wall) to p1
+    (outer wall): (columns, nodes across, 2)."""
     chord = p1 - p0
     length = np.linalg.norm(chord, axis=1)[:, None]
     t0, t1 = length * n0, length * n1
-    s = s[:, :, None] if s.ndim == 2 else s[None, :, None]  # per column or shared
+    s = s[:, :, None]
     h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
     h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
     p0, p1, t0, t1, chord = (v[:, None, :] for v in (p0, p1, t0, t1, chord))

@@ -10,13 +10,12 @@ examples/screw_pump_multiphase.toml).  Output: results_dir/pump_multiphase.csv.
 from __future__ import annotations
 
 import argparse
-import csv
 import time
 from pathlib import Path
 
 from rotorflow.postprocess import pump_multiphase as pm
 
-from .bench_pump_vacuum import pump_table, record
+from .bench_pump_vacuum import pump_table, read_record, record
 
 
 def _rows(want: str | None) -> list[pm.Row]:
@@ -50,9 +49,7 @@ def main(argv: list[str] | None = None) -> None:
               f"{pm.fit_gas_volume_fraction(raw, table, row, where=str(a.case))}")
         return
     summary = run(a.results, _rows(a.rows), a.case)[0]
-    with open(a.results / "pump_multiphase.csv", newline="") as f:
-        res = [{k: (v == "True" if v in ("True", "False") else float(v))
-                for k, v in r.items()} for r in csv.DictReader(f)]
+    res = read_record(a.results / "pump_multiphase.csv")
     print(pm.format_report(res))
     print(summary)
 

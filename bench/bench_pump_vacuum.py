@@ -61,6 +61,13 @@ def record(path: Path, res: list[dict], t0: float, c0: float) -> dict:
             "predicted": len(predicted)}
 
 
+def read_record(path: Path) -> list[dict]:
+    """The rows :func:`record` wrote, numbers and flags typed back."""
+    with open(path, newline="") as f:
+        return [{k: (v == "True" if v in ("True", "False") else float(v))
+                 for k, v in r.items()} for r in csv.DictReader(f)]
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rows", help="suction pressures (bar), comma separated; default all")
@@ -76,9 +83,7 @@ def main(argv: list[str] | None = None) -> None:
               f"{pv.fit_coefficient(raw, table, row, where=str(a.case))}")
         return
     summary = run(a.results, _rows(a.rows), a.case)[0]
-    with open(a.results / "pump_vacuum.csv", newline="") as f:
-        res = [{k: (v == "True" if v in ("True", "False") else float(v))
-                for k, v in r.items()} for r in csv.DictReader(f)]
+    res = read_record(a.results / "pump_vacuum.csv")
     print(pv.format_report(res))
     print(summary)
 

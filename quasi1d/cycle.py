@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .integrate import IntegrationError, PeriodRun, integrate_period
+from .integrate import IntegrationError, OverTime, PeriodRun, integrate_period
 from .model import ChamberModel
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_M_DIS, ACC_M_SUC, ACC_Q, ACC_W
 from .settings import Numerics
@@ -186,9 +186,17 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
         Y0 = np.repeat(z[None], d + 1 if batch else 1, axis=0)
         if batch:
             Y0[np.arange(1, d + 1), idx] += dz
-        run = integrate_period(model, Y0, method, rtol, atol, replay=replay,
-                               record=record, max_steps=num.max_steps,
-                               force_replay=max(dp, dT, mc, ec) < FORCE_REPLAY_BELOW)
+        try:
+            run = integrate_period(model, Y0, method, rtol, atol, replay=replay,
+                                   record=record, max_steps=num.max_steps,
+                                   force_replay=max(dp, dT, mc, ec) < FORCE_REPLAY_BELOW,
+                                   deadline=deadline)
+        except OverTime as exc:
+            budget = f"stopped at the time budget of {num.max_seconds:g} s ([numerics] max_seconds)"
+            if not cycles:  # no period's end to return
+                raise OverTime(f"{budget} in the first period: {exc}") from None
+            message = f"{budget} after {cycles} periods: "
+            break
         cycles += 1
         n_rhs += run.n_rhs
         method = run.method  # "auto" settles on the method the first period needed

@@ -97,7 +97,10 @@ def initial_state(model) -> np.ndarray:
     a liquid (:mod:`.liquid`) takes its inlet share of the trapped volume and keeps it."""
     n, geo, fl, op = model.n, model.geo, model.fluid, model.op
     y = np.zeros(model.n_state)
-    kap = model.suc.kappa
+    # A wet suction's kappa (rho a^2 / p of the equilibrium mixture) is far below 1: its
+    # p ~ rho^kappa would guess liquid-dense states the fluid has not got.  A guess only
+    # has to be a state; 1 (isothermal) is one for a gas or a wet mixture.
+    kap = max(model.suc.kappa, 1.0)
     beta = op.gas_volume_fraction if model.inv_rho_liquid else 1.0
     m_trap = beta * model.suc.rho * geo.v_trapped  # the gas trapped
     for k in range(1, n):

@@ -25,6 +25,7 @@ period map is one fixed smooth function while Newton's method converges on it.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -36,6 +37,15 @@ from . import stepping
 
 class IntegrationError(RotorflowError, RuntimeError):
     """The chamber equations could not be integrated (too stiff, or states left the range)."""
+
+
+class OverTime(IntegrationError):
+    """The wall-clock budget ran out inside a period (``deadline`` of integrate_period)."""
+
+
+#: Steps an adaptive segment takes between looks at the clock: a stiff segment can take
+#: its whole step budget (minutes) before the cycle solver's own check between periods.
+CLOCK_STEPS = 2000
 
 
 @dataclass(frozen=True)
@@ -110,7 +120,7 @@ class PeriodRun:
 
 def integrate_period(model, y0: np.ndarray, method: str, rtol: float, atol: np.ndarray,
                      replay=None, record=False, max_steps=200_000, h0=None,
-                     force_replay=False) -> PeriodRun:
+                     force_replay=False, deadline=None) -> PeriodRun:
     """Integrate one lobe period from y0 (B, n_state), applying the events.
 
     ``method`` "auto" runs dopri5 and falls back to "ros23" when the period turns out stiff;
@@ -118,27 +128,32 @@ def integrate_period(model, y0: np.ndarray, method: str, rtol: float, atol: np.n
     replaces the step-size choice; a replayed step that misses the tolerance by more
     than REPLAY_SLACK re-adapts its segment unless ``force_replay`` (the cycle solver's
     choice once the state hardly changes between periods, so that the map stays fixed).
+    ``deadline`` (time.perf_counter()) stops an adaptive segment with :class:`OverTime`
+    (scipy's "radau" and "bdf" are not watched).
     """
     with np.errstate(all="ignore"):  # non-finite stages are rejected by the error norm
         if method == "auto":
             try:
                 return _period(model, y0, "dopri5", rtol, atol, replay, record,
-                               AUTO_STIFF_STEPS, h0, True, force_replay)
+                               AUTO_STIFF_STEPS, h0, True, force_replay, deadline)
             except _Stiff:
                 method = "ros23"
                 replay = None
         return _period(model, y0, method, rtol, atol, replay, record, max_steps, h0, False,
-                       force_replay)
+                       force_replay, deadline)
 
 
 def _period(model, y0, method, rtol, atol, replay, record, max_steps, h0, stiff_error,
-            force_replay):
+            force_replay, deadline):
     y = np.array(y0, dtype=float, copy=True)
     run = PeriodRun(y, [], 0, 0, method)
     use_replay = replay is not None
     h = h0
     budget = [max_steps]
     for i, seg in enumerate(model.segments):
+        if deadline is not None and time.perf_counter() > deadline:
+            raise OverTime(f"the time budget ran out inside a period, at angle "
+                           f"{seg.start:.4f} rad, after {run.n_rhs} right-hand sides")
         for kind, k in seg.events:
             model.apply_event(kind, k, seg.start, y)
         if record:
@@ -166,7 +181,7 @@ def _period(model, y0, method, rtol, atol, replay, record, max_steps, h0, stiff_
                     use_replay = False
             if not ok:
                 y, ends, h = _adaptive(model, seg, y, step, stages, order, rtol, atol, h, run,
-                                       record, budget, stiff_error)
+                                       record, budget, stiff_error, deadline)
         run.steps.append(ends)
     run.y = y
     run.replayed = use_replay
@@ -207,11 +222,12 @@ def _stepper(model, seg, method, atol, S):
 
 
 def _run_segment(model, seg, step, ends, y, k1, h, rtol, atol, order, budget, slack,
-                 record):
-    """stepping.segment as Python, or its compiled twin for the compiled step."""
+                 record, start=None):
+    """stepping.segment as Python, or its compiled twin for the compiled step; from
+    ``start`` (default the segment's) to the segment's end."""
     fast = getattr(model, "fast", {}).get("kernel")
-    rest = (seg.start, seg.end, ends, np.ascontiguousarray(y), k1, h, rtol, atol, order,
-            budget, slack, record)
+    rest = (seg.start if start is None else start, seg.end, ends, np.ascontiguousarray(y),
+            k1, h, rtol, atol, order, budget, slack, record)
     if fast is not None and step[0] is fast.rk_step:
         return fast.segment(step[1], *rest)
     if fast is not None and step[0] is fast.ros23_step:
@@ -219,36 +235,55 @@ def _run_segment(model, seg, step, ends, y, k1, h, rtol, atol, order, budget, sl
     return stepping.segment(step[0], step[1], *rest)
 
 
-def _first_rhs(model, seg, step, y):
-    """f(start, y) of the segment: compiled where its step is (a numpy right-hand side
-    costs ~80 us, four times the compiled batch; issue 19's per-point overheads)."""
+def _first_rhs(model, seg, step, y, t=None):
+    """f(t, y) in the segment, t by default its start: compiled where its step is (a
+    numpy right-hand side costs ~80 us, four times the compiled batch; issue 19's
+    per-point overheads)."""
+    t = seg.start if t is None else t
     fast = getattr(model, "fast", {}).get("kernel")
     if fast is not None and step[0] in (fast.rk_step, fast.ros23_step):
-        return fast.rhs_segment(seg.start, np.ascontiguousarray(y), step[1])
-    return model.rhs(seg.start, y, seg)
+        return fast.rhs_segment(t, np.ascontiguousarray(y), step[1])
+    return model.rhs(t, y, seg)
 
 
 def _adaptive(model, seg, y, step, stages, order, rtol, atol, h, run, record, budget,
-              stiff_error):
-    k1 = _first_rhs(model, seg, step, y)
-    status, t, y, h, ends, trace, tried, rejected = _run_segment(
-        model, seg, step, np.empty(0), y, k1, np.nan if h is None else float(h), rtol,
-        atol, order, budget[0], 0.0, record)
-    budget[0] -= tried
-    run.n_rhs += 1 + stages * tried
-    run.n_rejected += rejected
+              stiff_error, deadline):
+    """The segment in chunks of CLOCK_STEPS steps, the clock read between them."""
+    k1 = k_start = _first_rhs(model, seg, step, y)
+    t, h = seg.start, np.nan if h is None else float(h)
+    parts = []
+    while True:
+        chunk = budget[0] if deadline is None else min(budget[0], CLOCK_STEPS)
+        status, t, y, h, ends, trace, tried, rejected = _run_segment(
+            model, seg, step, np.empty(0), y, k1, h, rtol, atol, order, chunk, 0.0,
+            record, start=t)
+        budget[0] -= tried
+        run.n_rhs += 1 + stages * tried
+        run.n_rejected += rejected
+        parts.append((ends, trace))
+        if status != stepping.OVER_BUDGET or budget[0] <= 0:
+            break
+        if time.perf_counter() > deadline:
+            raise OverTime(f"the time budget ran out inside a period, near angle {t:.4f} "
+                           f"rad, after {run.n_rhs} right-hand sides")
+        k1 = _first_rhs(model, seg, step, y, t)
+        run.n_rhs += 1
+    ends = np.concatenate([e for e, _ in parts])
+    trace = np.concatenate([tr for _, tr in parts])
     if status == stepping.OVER_BUDGET:
         if stiff_error:
             raise _Stiff
+        others = ", ".join(f'"{m}"' for m in ("ros23", "bdf") if m != run.method)
         raise IntegrationError(
             f"step limit reached near angle {t:.4f} rad: the chamber equations are too "
-            'stiff for this integrator; use integrator "auto", "ros23" or "bdf"')
+            f'stiff for integrator "{run.method}"; try {others}, or a larger [numerics] '
+            "max_steps")
     if status == stepping.UNDERFLOW:
         if stiff_error:
             raise _Stiff
         raise IntegrationError(f"step size underflow near angle {t:.6f} rad (state "
                                "not finite or tolerance unreachable)")
-    _record(run, ends, trace, record, k1)
+    _record(run, ends, trace, record, k_start)
     return y, list(ends), h
 
 

@@ -276,3 +276,14 @@ def test_a_cycle_that_runs_out_of_periods_says_so(table):
     assert not res.converged and f["converged"] is False
     assert "not converged after 1 periods" in f["message"]
     assert "\n" not in f["message"]
+
+
+def test_time_budget_holds_inside_the_first_period(table):
+    # The budget was read only between periods: a stiff first period (a wet pentane pump,
+    # 200,000 steps of ros23) ran 8.7 min against a 60-s budget.  Now the clock is read
+    # between segments and every CLOCK_STEPS steps, and a first period that runs out has
+    # no state to return: it is an error naming the budget.
+    from rotorflow.quasi1d.integrate import OverTime
+
+    with pytest.raises(OverTime, match=r"max_seconds\) in the first period"):
+        simulate(table, _op(), numerics=Numerics(max_seconds=1e-6))

@@ -370,3 +370,23 @@ def test_isothermal_work_only_where_the_isotherm_stays_vapour():
     co2 = tabulated("CO2", 80e5, 120e5, 300.0, 300.0, 300.0, 1.3)
     assert co2.work_isothermal(35e5, 310.0, 95e5) == pytest.approx(
         _isothermal_reference("CO2", 35e5, 310.0, 95e5), rel=1e-7)
+
+
+def test_a_low_quality_suction_starts_from_states_the_fluid_has(machine):
+    # A mostly liquid wet suction (R134a at 3 bar, quality 0.05: ~80 % vapour by volume)
+    # has kappa = rho a^2 / p far below 1; the starting guess's p ~ rho^kappa asked the
+    # fluid for states denser than its liquid and crashed in CoolProp's (rho, p) flash.
+    from rotorflow.quasi1d.simulate import build_model
+
+    table, raw, leak = machine
+    Tsat = CP.PropsSI("T", "P", 3e5, "Q", 0.05, "R134a")
+    model = build_model(table, _op(raw, suction_quality=0.05, T_suction_K=round(Tsat, 2)),
+                        leak)
+    assert model.suc.kappa < 0.5  # the case the guess failed on
+    _, V, p, T, m = model.observe(model.geo.birth, model.initial_state())
+    live = np.isfinite(p)
+    assert live.sum() >= 2 and np.all(m[live] > 0)
+    # every start state lies between the plena, and is no denser than the liquid
+    assert np.all((p[live] > 0.99 * 3e5) & (p[live] < 1.01 * 9e5))
+    rho_liquid = CP.PropsSI("Dmass", "P", 9e5, "Q", 0.0, "R134a")
+    assert np.all(m[live] / V[live] < rho_liquid)

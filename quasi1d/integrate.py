@@ -266,8 +266,7 @@ def _adaptive(model, seg, y, step, stages, order, rtol, atol, h, run, record, bu
         if time.perf_counter() > deadline:
             raise OverTime(f"the time budget ran out inside a period, near angle {t:.4f} "
                            f"rad, after {run.n_rhs} right-hand sides")
-        k1 = _first_rhs(model, seg, step, y, t)
-        run.n_rhs += 1
+        k1 = _first_rhs(model, seg, step, y, t)  # (counted with the chunk's steps)
     ends = np.concatenate([e for e, _ in parts])
     trace = np.concatenate([tr for _, tr in parts])
     if status == stepping.OVER_BUDGET:

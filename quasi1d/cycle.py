@@ -178,25 +178,16 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
     anderson = None  # the iterate history once Anderson acceleration has taken over
     deadline = time.perf_counter() + num.max_seconds
     for _ in range(num.max_cycles):
-        if cycles and time.perf_counter() > deadline:
-            message = (f"stopped at the time budget of {num.max_seconds:g} s ([numerics] "
-                       f"max_seconds) after {cycles} periods: ")
-            break
         batch = newton and not nw.chord
         Y0 = np.repeat(z[None], d + 1 if batch else 1, axis=0)
         if batch:
             Y0[np.arange(1, d + 1), idx] += dz
-        try:
-            run = integrate_period(model, Y0, method, rtol, atol, replay=replay,
-                                   record=record, max_steps=num.max_steps,
-                                   force_replay=max(dp, dT, mc, ec) < FORCE_REPLAY_BELOW,
-                                   deadline=deadline)
-        except OverTime as exc:
-            budget = f"stopped at the time budget of {num.max_seconds:g} s ([numerics] max_seconds)"
-            if not cycles:  # no period's end to return
-                raise OverTime(f"{budget} in the first period: {exc}") from None
-            message = f"{budget} after {cycles} periods: "
+        ran, message = _budgeted_period(model, Y0, method, rtol, atol, replay, record, num,
+                                        max(dp, dT, mc, ec) < FORCE_REPLAY_BELOW, deadline,
+                                        cycles)
+        if ran is None:
             break
+        run = ran
         cycles += 1
         n_rhs += run.n_rhs
         method = run.method  # "auto" settles on the method the first period needed
@@ -244,6 +235,21 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
     model.cache.clear()  # the result keeps the model; not its geometry cache
     return CycleSolution(model, z, run, cycles, converged, message, dp, dT, mc, ec, cm, ce,
                          n_rhs)
+
+
+def _budgeted_period(model, Y0, method, rtol, atol, replay, record, num, force_replay,
+                     deadline, cycles):
+    """(one period's run, "") or, once the time budget runs out inside a period after
+    the first, (None, the budget's message); the first has no state to return: OverTime."""
+    try:
+        return integrate_period(model, Y0, method, rtol, atol, replay=replay, record=record,
+                                max_steps=num.max_steps, force_replay=force_replay,
+                                deadline=deadline), ""
+    except OverTime as exc:
+        budget = f"stopped at the time budget of {num.max_seconds:g} s ([numerics] max_seconds)"
+        if not cycles:
+            raise OverTime(f"{budget} in the first period: {exc}") from None
+        return None, f"{budget} after {cycles} periods: "
 
 
 @dataclass

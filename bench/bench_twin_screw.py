@@ -14,17 +14,20 @@ machine's open areas at the same angles, its sealed regions swept REFERENCE_PORT
 times per period).  Target (issue 13):
 geometry figures and table of a 4/6 pair at 1e-4 relative error in under 1 s.
 
-Last measured (loaded 2-core machine, 1 core; another job ran on the other), at 24 / 48
-/ 96 / 192 points per period: CPU 2.21 / 2.97 / 4.36 / 9.14 s (pin-cycloid), 2.53 / 3.46
-/ 5.76 / 9.60 s (circular); at 24, the least of seven runs on one core: 1.55 and 1.90 s
-(the tree before the jumps' sweep, the same hour: 1.43 and 1.63 s, least of five).
-Discharge areas 9.5e-5 / 8.8e-5 / 5.5e-5 / 2.7e-5 (pin-cycloid) and 7.4e-4 / 3.1e-4 /
-2.6e-4 / 1.1e-4 (circular), suction 9.3e-5 / 8.8e-5 / 5.7e-5 / 1.8e-5 and 1.8e-4 /
-8.2e-5 / 6.7e-5 / 2.8e-5; Pi_max within 2.5e-5, V_max 1e-7, the lines 5.1e-5 (the
-circular's interlobe at 24) of theirs.  So the pin-cycloid meets the error at every
-resolution and the time at none; the circular misses the error on its discharge below
-192 and its suction at 24 (the sealed region's sweep, geometry/port_areas.py and the
-README: a deficit along the path of contact, cause not found).
+Last measured (loaded 2-core machine, 1 core; other jobs on both), at 24 / 48 / 96 /
+192 points per period: CPU 2.73 / 3.31 / 4.72 / 10.08 s (pin-cycloid), 3.36 / 4.42 /
+6.30 / 12.41 s (circular); at 24, the least of eight runs on one core, alternated with
+the tree before in the same hour: 1.81 and 2.21 s (before: 1.57 and 1.95 s; the samples
+at corners' turns and the films' classification, geometry/footprint_events.py and
+geometry/surfaces.py).  Discharge areas 3.3e-5 / 5.3e-5 / 8.8e-5 / 6.4e-5 (pin-cycloid)
+and 4.9e-4 / 2.7e-4 / 8.1e-5 / 1.0e-4 (circular), suction 7.8e-5 / 2.7e-5 / 1.9e-5 /
+1.9e-6 and 1.2e-4 / 4.3e-5 / 3.6e-5 / 2.7e-5; Pi_max within 2.5e-5, V_max 1e-7, the
+lines 5.1e-5 (the circular's interlobe at 24) of theirs.  So the pin-cycloid meets the
+error at every resolution and the time at none; the circular misses the error on its
+discharge at 24 and 48 and its suction at 24 (the sealed region's sweep: what is left,
+geometry/port_areas.py).  The circular's deficit along the path of contact was mostly
+the sections' vertices told to the wrong rotor in the film at the chamber's tip
+(geometry/surfaces.py), and its tip's corner turning at the cusp line between samples.
 """
 
 from __future__ import annotations
@@ -51,9 +54,10 @@ RESOLUTIONS = (24, 48, 96, 192)
 #: 192 left it 1.2e-4 from its limit.)
 REFERENCE = 768
 #: Samples per period of the reference's swept sealed regions (a table's: its section
-#: grid, twice its points per period).  The 192 points per period's tables (384) are
-#: 3e-5 (pin-cycloid) and 1.1e-4 (circular) of the largest discharge area off it; its
-#: own section grid (1536) costs a section cut per sample.
+#: grid, twice its points per period).  On one 24-point machine, 384 samples are 4e-5
+#: (pin-cycloid) and 1.9e-5 (circular) of the largest discharge area off it (the
+#: pin-cycloid's where 768 holds less than a union of real sections, geometry/
+#: port_areas.py); its own section grid (1536) costs a section cut per sample.
 REFERENCE_PORT_STEPS = 768
 #: The lines' reference.  From 384 points per period on, the pin-cycloid's interlobe
 #: lines to the chambers 4 and 6 periods on shrink by 4e-3 and 1.5e-2 (768) against

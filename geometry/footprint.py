@@ -30,7 +30,14 @@ sample's (:mod:`.footprint_events`):
   rigidly moved pocket;
 * a piece's end that jumps along its surface (a sliver that opens, or closes, right
   next to its chamber, so its ring keeps matched pieces): the stretch it jumped over is
-  swept per vertex, as a sliver's (:meth:`.footprint_events.Events._jumps`).
+  swept per vertex, as a sliver's (:meth:`.footprint_events.Events._jumps`);
+* a corner whose path turns (a tip reaching a cut line): more samples, homed in on the
+  turn (:meth:`.footprint_events.Events._turns`).
+
+The corners are where a piece of one rotor meets another's or a still curve, so each
+vertex must be told to the right rotor; in a film thinner than the profiles' chord
+error (the circular pair's conformal arcs) that takes the true curves
+(:meth:`.surfaces.Surfaces._films`).
 
 Optionally (REFINE) one more section is cut just after each event, where the sliver has
 its true extent, and the sub-steps are swept.
@@ -91,6 +98,7 @@ class Sweeper(Events):
         self.periods = [r[5] for r in surfaces.rotors]
         self.box = None if crop is None else np.reshape(crop.bounds(), (2, 2))
         self.events = []  # (kind, angle) of the events met, for tests and benches
+        self.turns = []  # the samples cut at corners' turns (Events._turns), likewise
 
     def sample(self, psi: float) -> Sample | None:
         from manifold3d import CrossSection, FillRule
@@ -139,8 +147,9 @@ class Sweeper(Events):
         pieces = []
         self._bands = []
         prev = None
-        for psi in psis:
-            cur = self.sample(float(psi))
+        cache = {}
+        for psi in self._turns([float(p) for p in psis], cache):
+            cur = cache[psi] if psi in cache else self.sample(psi)
             if cur is not None:
                 pieces.append(cur.region)
             if prev is not None:
@@ -167,19 +176,19 @@ class Sweeper(Events):
         for ring in sorted({c.ring for c in born}):
             ev = self._event(b, ring, h, -1.0)
             if ev is not None:
-                events.append((psi_b - ev[0], "born", ev[1], ring))
+                events.append((psi_b - ev[0], "born", ev[1], ring, ev[2]))
         for ring in sorted({c.ring for c in dying}):
             ev = self._event(a, ring, h, +1.0)
             if ev is not None:
-                events.append((a.psi + ev[0], "dying", ev[1], ring))
+                events.append((a.psi + ev[0], "dying", ev[1], ring, ev[2]))
         inside = [e for e in events if a.psi < e[0] < psi_b and e[2] in REFINE]
-        self.events += [(kind, psi) for psi, _, kind, _ in events]
+        self.events += [(kind, psi) for psi, _, kind, *_ in events]
         if refine and inside:
             # Cut a section next to each event within the step and sweep the sub-steps
             # (their events, now right next to a sample, are swept rigidly).
             extra = sorted(psi + (EVENT_LEAD * (psi_b - psi) if side == "born"
                                   else -EVENT_LEAD * (psi - a.psi))
-                           for psi, side, _, _ in inside)
+                           for psi, side, *_ in inside)
             self.events = self.events[:len(self.events) - len(events)]
             out = []
             prev = a
@@ -192,10 +201,9 @@ class Sweeper(Events):
             return out
         self._bands += [(p, q, a.psi, psi_b, a, b) for p, q in pairs]
         out = []
-        for psi, side, kind, ring in events:
+        for psi, side, kind, ring, reach in events:
             smp, sign = (b, -1.0) if side == "born" else (a, +1.0)
-            d = abs(psi - smp.psi)
-            out += self._rigid(smp, ring, sign * d, kind)
+            out += self._rigid(smp, ring, sign * abs(psi - smp.psi), kind, sign * reach)
         return [x for x in out if x is not None]
 
     def _match(self, ca, cb, h):

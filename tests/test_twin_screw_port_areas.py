@@ -208,10 +208,12 @@ def test_a_sliver_that_opens_onto_its_chamber_is_swept():
     circle) part along their length at once 148.3 deg after the chamber's birth, next to
     the chamber: the sliver joins a ring whose pieces are matched, and only the pieces'
     ends jump (a whole profile segment in one step).  Swept at the section grid's two
-    steps (48 per period) in a box round the arc, the sweep holds 80 % of what 64 steps
-    sweep (2.07 of 2.59 mm2, measured; with the band's chord alone 1.27, 49 %), and
-    reaches past it by 0.7 % of it (the stretch's rigid passage from where its gaps
-    close, against the fine sweep's own chords)."""
+    steps (48 per period) in a box round the arc, the sweep holds 95 % of what 64 steps
+    sweep (1.94 of 2.04 mm2, measured; with the band's chord alone 1.14, 56 %), and
+    reaches past it by 6 % of it (0.13 mm2, the coarse bands' corners).  (Before the
+    film's vertices were told by the true profiles, surfaces.Surfaces._films, the
+    sweeps from 32 steps on took in 0.55 mm2 more: 2.59 mm2 at 64, against 2.04 at 16
+    and 2.03 at 256 now.)"""
     _, m, _ = built(EXAMPLES[1])
     pair, sec = m.pair, m.section
     from manifold3d import CrossSection
@@ -224,5 +226,5 @@ def test_a_sliver_that_opens_onto_its_chamber_is_swept():
         return sweeper.sweep(sec.phi_i + np.linspace(146.25, 150.0, n + 1) * DEG) ^ box
 
     coarse, fine = swept(2), swept(64)
-    assert coarse.area() > 0.75 * fine.area()
-    assert (coarse - fine).area() < 0.02 * fine.area()
+    assert (coarse ^ fine).area() > 0.9 * fine.area()
+    assert (coarse - fine).area() < 0.08 * fine.area()

@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from .planar import cross
 from .surfaces import area as _area
 from .surfaces import turn as _turn
 
@@ -307,7 +308,7 @@ class Events:
         out, least = [], 2.0 * TURN_AREA * self.surfaces.size ** 2
         for _ in range(TURNS):
             k = pp[1] + (at - tt[1]) * (pp[1] - pp[0]) / (tt[1] - tt[0])
-            if abs(_cross(k - pp[1], pp[2] - pp[1])) < least:
+            if abs(cross(k - pp[1], pp[2] - pp[1])) < least:
                 break
             smp = cache[at] = self.sample(at)
             out.append(at)
@@ -345,11 +346,7 @@ def _turn_in(pairs, psis, i):
 def _off(q, a, b) -> float:
     """Distance of q from the line through a and b."""
     d = b - a
-    return abs(_cross(q - a, d)) / max(float(np.hypot(*d)), 1e-300)
-
-
-def _cross(u, v) -> float:
-    return float(u[0] * v[1] - u[1] * v[0])
+    return abs(cross(q - a, d)) / max(float(np.hypot(*d)), 1e-300)
 
 
 def _turning(p, t, smooth=True):
@@ -370,11 +367,11 @@ def _turning(p, t, smooth=True):
         return None
     v0 = (p[1] - p[0]) / (t[1] - t[0])  # the corner's speeds either side
     v1 = (p[3] - p[2]) / (t[3] - t[2])
-    det = _cross(v0, v1)
+    det = float(cross(v0, v1))
     if abs(det) <= 1e-12 * float(np.dot(v0, v0) + np.dot(v1, v1)):  # parallel, or still
         return None
-    a0 = t[1] + _cross(r, v1) / det  # along p1 + (a - t1) v0
-    a1 = t[2] + _cross(r, v0) / det  # along p2 + (a - t2) v1
+    a0 = t[1] + cross(r, v1) / det  # along p1 + (a - t1) v0
+    a1 = t[2] + cross(r, v0) / det  # along p2 + (a - t2) v1
     if not (t[1] < a0 < t[2] and t[1] < a1 < t[2]):
         return None
     return 0.5 * (a0 + a1)

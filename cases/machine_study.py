@@ -4,7 +4,8 @@ grids per angle, against the quasi-1D model's frozen state (issue 16).
 The case file's ``[cfd_machine]`` section (:class:`StudySettings`) names the angles and
 the coarse grid; the medium and fine grids refine it by ``refinement_ratio`` in every
 direction (columns, cells across every gap, layers; the end layer thinner by the same
-ratio).  Each run is a :mod:`.machine_run` case under ``runs_dir``, reused by key when
+ratio; ``grids = 2`` runs the coarse and medium ones only, the quick estimate).  Each
+run is a :mod:`.machine_run` case under ``runs_dir``, reused by key when
 the stage reruns, and its mass balance over all patches must hold to 0.5 % or the run
 is flagged and left out.  Per angle, the quasi-1D model of the same case (end faces
 sealed, as the CFD's end plates are: :mod:`.machine_setup`) is solved in the frozen
@@ -42,7 +43,7 @@ log = logging.getLogger(__name__)
 SECTION = "cfd_machine"
 KEYS = ("angles_deg", "gap_um", "columns", "cells_across_gap", "layers", "end_layer_mm",
         "refinement_ratio", "models", "flow_coefficient", "processes", "max_iterations",
-        "moving_walls", "wall_clustering", "even_reach", "runs_dir")
+        "moving_walls", "wall_clustering", "even_reach", "runs_dir", "grids")
 MODELS = ("nozzle", "fanno", "cfd-calibrated", "rarefied")
 LEVELS = ("coarse", "medium", "fine")
 
@@ -69,12 +70,19 @@ class StudySettings:
     runs_dir: str | None = None
     #: :attr:`.ogrid.OGridSpec.even_reach`: 0 keeps the tanh law in the gaps too.
     even_reach: float = 0.0
+    #: 3: coarse, medium and fine, extrapolated at the observed order; 2: the quick
+    #: estimate, coarse and medium only, extrapolated at the formal order 2
+    #: (:func:`rotorflow.postprocess.richardson.two_grid`).
+    levels: int = 3
 
     def spec(self) -> OGridSpec:
         return OGridSpec(wall_clustering=self.wall_clustering, even_reach=self.even_reach)
 
-    def grids(self) -> tuple[Grid, Grid, Grid]:
-        return self.coarse, self.coarse.refined(self.ratio), self.coarse.refined(self.ratio**2)
+    def grids(self) -> tuple[Grid, ...]:
+        """The grids the study runs, coarse first."""
+        every = (self.coarse, self.coarse.refined(self.ratio),
+                 self.coarse.refined(self.ratio**2))
+        return every[:self.levels]
 
     @classmethod
     def from_section(cls, d, where: str = "the case") -> StudySettings:
@@ -114,6 +122,8 @@ class StudySettings:
                 raise bad(key, "a string")
         if not isinstance(d.get("moving_walls", True), bool):
             raise bad("moving_walls", "true or false")
+        if d.get("grids", 3) not in (2, 3) or isinstance(d.get("grids"), bool):
+            raise bad("grids", "2 (coarse and medium: the quick estimate) or 3")
         end = number("end_layer_mm", -1.0) if "end_layer_mm" in d else None
         grid = Grid(number("columns", whole=True), number("cells_across_gap", whole=True),
                     number("layers", whole=True), None if end is None else end * 1e-3)
@@ -133,7 +143,8 @@ class StudySettings:
                    number("max_iterations", cls.max_iterations, whole=True),
                    d.get("moving_walls", True),
                    number("wall_clustering", cls.wall_clustering), d.get("runs_dir"),
-                   number("even_reach", 0.0) if "even_reach" in d else 0.0)
+                   number("even_reach", 0.0) if "even_reach" in d else 0.0,
+                   int(d.get("grids", 3)))
 
 
 def validate_section(data: dict, where: str, pair) -> None:
@@ -167,7 +178,7 @@ def run_angle(case, table, phi: float, settings: StudySettings, gap: float, runs
             "pairs": {f"{a},{b}": f for (a, b), f in pairs.items()}, "total": total}
     controls = Controls(max_iterations=settings.max_iterations)
     folder = runs / f"machine-{case.pair.digest()}-{angle_name(phi)}-g{gap * 1e6:g}um"
-    for level, grid in zip(LEVELS, settings.grids(), strict=True):
+    for level, grid in zip(LEVELS[:settings.levels], settings.grids(), strict=True):
         m = replace(frozen_machine(case, table, phi, gap, grid, settings.max_iterations,
                                    where, settings.spec()),
                     moving_walls=settings.moving_walls)
@@ -215,6 +226,7 @@ def run_stage(ctx) -> dict:
     if good:
         result = machine_compare.write(good, ctx.out)
         figures["closest_model"] = result["closest_model"]
+        figures["two_grid_leakage_error"] = result["two_grid"]["leakage"]["max_abs"]
         for m, e in result["models"].items():
             figures[f"rms_error[{m}]"] = e["all"]["rms"]
             figures[f"leakage_rms_error[{m}]"] = e["leakage"]["rms"]

@@ -8,8 +8,12 @@ those between two chambers open to ports too, which carry the machine's leakage 
 discharge to suction as much as any), and the machine's total leakage (discharge plenum
 to suction plenum).  Each is extrapolated from the three grids with the observed order
 (:mod:`.richardson`); a quantity whose grids oscillate or diverge is compared on the
-finest grid and says so.  The error of a model is ``model / CFD - 1`` (the pressures
-absolute, so a 1 % error is 1 % of the chamber's pressure).
+finest grid and says so.  Each also gets the quick estimate of the coarse and medium
+grids alone (:func:`.richardson.two_grid`, at the formal second order) and, where the
+fine grid ran, that estimate's error against the three-grid value; a study run on two
+grids (``grids = 2``) is compared against the quick estimate.  The error of a model is
+``model / CFD - 1`` (the pressures absolute, so a 1 % error is 1 % of the chamber's
+pressure).
 
 Inputs are plain dicts (the stage's ``angles.json``), so this module is tested without
 OpenFOAM.
@@ -24,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .richardson import richardson
+from .richardson import richardson, two_grid
 
 #: A sealing path carrying less than this share of the total leakage on every grid is
 #: not compared: its relative error is noise (a pair of chambers that touch at a few
@@ -35,15 +39,23 @@ KINDS = ("pressure", "path", "leakage")
 
 
 def _rich(values, ratio: float) -> dict:
+    quick = two_grid(values[:2], ratio)
+    if len(values) == 2:
+        return {"convergence": "two-grid", "order": quick.order,
+                "extrapolated": quick.extrapolated, "uncertainty": quick.uncertainty,
+                "level_errors": [*quick.relative_errors(), math.nan],
+                "two_grid": quick.extrapolated, "two_grid_error": math.nan}
     r = richardson(values, ratio)
     return {"convergence": r.kind, "order": r.order, "extrapolated": r.extrapolated,
             "uncertainty": r.uncertainty,
-            "level_errors": list(r.relative_errors())}
+            "level_errors": list(r.relative_errors()),
+            "two_grid": quick.extrapolated,
+            "two_grid_error": quick.extrapolated / r.extrapolated - 1.0}
 
 
 def quantities(angle: dict) -> list[dict]:
-    """The compared quantities of one angle (``angle``: the stage's record, three ``runs``
-    coarse to fine, each with chamber_p, seals, leakage_kg_s; ``models``: per model its
+    """The compared quantities of one angle (``angle``: the stage's record, three (or two)
+    ``runs`` coarse to fine, each with chamber_p, seals, leakage_kg_s; ``models``: per model its
     pressures, pairs and total; ``closed``: the closed slots), each with its CFD values,
     extrapolation and model values."""
     runs, ratio = angle["runs"], angle["ratio"]
@@ -53,7 +65,8 @@ def quantities(angle: dict) -> list[dict]:
 
     def add(kind, name, cfd, model_values):
         row = {"angle_deg": angle["angle_deg"], "kind": kind, "name": name,
-               "cfd": [float(v) for v in cfd], **_rich(cfd, ratio)}
+               "cfd": [float(v) for v in cfd] + [math.nan] * (3 - len(cfd)),
+               **_rich(cfd, ratio)}
         row["models"] = {m: float(v) for m, v in model_values.items()}
         out.append(row)
 
@@ -106,13 +119,25 @@ def summary(rows: list[dict]) -> dict:
                         "count": int(e.size)}
         table[m] = entry
     closest = min(table, key=lambda m: table[m]["all"]["rms"]) if table else None
-    return {"models": table, "closest_model": closest}
+    return {"models": table, "closest_model": closest, "two_grid": _two_grid_errors(rows)}
+
+
+def _two_grid_errors(rows: list[dict]) -> dict:
+    """Per kind the largest error of the quick (coarse and medium) estimate against the
+    three-grid extrapolation, over the quantities whose three grids converge
+    monotonically (elsewhere there is no extrapolation to hold it to)."""
+    out = {}
+    for kind in KINDS:
+        e = [abs(r["two_grid_error"]) for r in rows
+             if r["kind"] == kind and r["convergence"] == "monotone"]
+        out[kind] = {"max_abs": max(e) if e else math.nan, "count": len(e)}
+    return out
 
 
 def write(angles: list[dict], out_dir: Path) -> dict:
     """``machine_errors.csv`` (one row per quantity), ``machine_errors.md`` (the summary)
-    and the summary dict it returns; ``angles``: the records of the angles whose three
-    runs all converged."""
+    and the summary dict it returns; ``angles``: the records of the angles whose runs
+    all converged."""
     rows = [q for a in angles for q in quantities(a)]
     out_dir = Path(out_dir)
     models = sorted({m for r in rows for m in r["models"]})
@@ -120,12 +145,13 @@ def write(angles: list[dict], out_dir: Path) -> dict:
         w = csv.writer(fh)
         w.writerow(["angle_deg", "kind", "quantity", "cfd_coarse", "cfd_medium", "cfd_fine",
                     "convergence", "observed_order", "cfd_extrapolated", "uncertainty",
-                    "coarse_error", "medium_error", "fine_error",
-                    *[f"{m}{s}" for m in models for s in ("", "_error")]])
+                    "coarse_error", "medium_error", "fine_error", "two_grid",
+                    "two_grid_error", *[f"{m}{s}" for m in models for s in ("", "_error")]])
         for r in rows:
             ref = r["extrapolated"]
             w.writerow([r["angle_deg"], r["kind"], r["name"], *r["cfd"], r["convergence"],
                         r["order"], ref, r["uncertainty"], *r["level_errors"],
+                        r["two_grid"], r["two_grid_error"],
                         *[v for m in models for v in (r["models"][m], r["models"][m] / ref - 1)]])
     result = summary(rows)
     lines = ["| model | pressures RMS | paths RMS | total leakage RMS | all RMS | all max |",
@@ -135,6 +161,11 @@ def write(angles: list[dict], out_dir: Path) -> dict:
                      f"{e['leakage']['rms']:.1%} | {e['all']['rms']:.1%} | "
                      f"{e['all']['max_abs']:.1%} |")
     lines.append(f"\nclosest to the extrapolated CFD: {result['closest_model']}")
+    quick = result["two_grid"]
+    lines.append("\nthe coarse and medium grids alone (two-grid Richardson at order 2) "
+                 "against the three-grid extrapolation, largest error: "
+                 + ", ".join(f"{k} {q['max_abs']:.2%} ({q['count']})"
+                             for k, q in quick.items()))
     (out_dir / "machine_errors.md").write_text("\n".join(lines) + "\n")
     (out_dir / "machine_summary.json").write_text(json.dumps(result, indent=2) + "\n")
     return result

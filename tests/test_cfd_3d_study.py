@@ -129,6 +129,36 @@ def test_comparison_extrapolates_and_finds_the_closest_model(tmp_path):
     assert len(text) == 1 + len(rows)
 
 
+def test_quick_estimate_of_two_grids_against_the_three_grid_value(tmp_path):
+    """The coarse and medium grids alone, extrapolated at order 2: exact where the
+    grids' true order is 2; where it is 1.5 (the layers' order measured along the
+    rotors), off by (r^2 - r^1.5) / (r^2 - 1) of the medium grid's error, which the
+    table reports against the three-grid value (here order 1.5, observed exactly).  A
+    study of two grids compares the models against the quick estimate."""
+    exact = {"p4": 2.0e5, "f34": -4.0e-4, "f45": -4.0e-4, "total": 8.0e-4}
+    models = {"m": {"pressures": {"4": 2.0e5}, "total": 8.8e-4,
+                    "pairs": {"3,4": -4.0e-4, "4,5": -4.0e-4}}}
+    at2 = machine_compare.quantities(_record(exact, 2.0, 1.5, models))
+    assert all(abs(r["two_grid_error"]) < 1e-12 for r in at2)
+    record = _record(exact, 1.5, 1.5, models)
+    rows = machine_compare.quantities(record)
+    total = rows[-1]
+    share = (1.5**2 - 1.5**1.5) / (1.5**2 - 1)
+    assert total["two_grid_error"] == pytest.approx(share * 0.1 / 1.5**1.5, rel=1e-6)
+    result = machine_compare.write([record], tmp_path)
+    assert result["two_grid"]["leakage"]["max_abs"] == pytest.approx(
+        abs(total["two_grid_error"]), rel=1e-12)
+    # grids = 2: only coarse and medium ran; the models are held to the quick estimate.
+    record["runs"] = record["runs"][:2]
+    quick = machine_compare.quantities(record)[-1]
+    assert quick["convergence"] == "two-grid"
+    assert quick["extrapolated"] == pytest.approx(total["two_grid"], rel=1e-12)
+    assert machine_compare.errors([quick])["m"]["leakage"][0] == pytest.approx(
+        8.8e-4 / total["two_grid"] - 1, rel=1e-12)
+    machine_compare.write([record], tmp_path)
+    assert "two-grid" in (tmp_path / "machine_errors.csv").read_text()
+
+
 def test_a_model_matching_the_finest_grid_is_not_exact(tmp_path):
     """The comparison is against the extrapolation, not the finest grid: a model equal
     to the finest grid's values carries the finest grid's own error (here the order-1
@@ -152,6 +182,8 @@ def test_grids_refine_every_direction_by_the_ratio():
     assert (fine.columns, fine.cells_across_gap, fine.layers) == (1728, 9, 36)
     assert fine.end_layer_m == pytest.approx(coarse.end_layer_m / 2.25)
     assert Grid(512, 4, 4).label == "c512-x4-l4"
+    quick = StudySettings.from_section({**CASE.raw["cfd_machine"], "grids": 2})
+    assert quick.grids() == (coarse, medium)
 
 
 @pytest.mark.parametrize("old, new, word", [
@@ -160,6 +192,7 @@ def test_grids_refine_every_direction_by_the_ratio():
     ("models = [", "mesh = 2\nmodels = [", "mesh"),
     ('models = ["nozzle", "fanno", "cfd-calibrated"]', 'models = ["orifice"]', "models"),
     ("columns = 768", "columns = 768.5", "whole number"),
+    ("columns = 768", "columns = 768\ngrids = 1", "grids"),
 ])
 def test_bad_cfd_machine_section_exits_2_with_one_line(tmp_path, old, new, word):
     text = (CASES / "cfd_machine.toml").read_text()

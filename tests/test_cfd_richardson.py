@@ -79,3 +79,24 @@ def test_rejects_malformed_input(bad):
 def test_rejects_ratio_not_above_one():
     with pytest.raises(ValueError):
         richardson([1.0, 1.1, 1.2], 1.0)
+
+
+@pytest.mark.parametrize("ratio", [1.5, 2.0])
+def test_two_grid_estimate_is_exact_at_the_true_order_and_biased_off_it(ratio):
+    """f = f0 + C h^p: at the true order two meshes give f0 back; assumed 2 where the
+    true order is 1.5, the estimate keeps the share (r^2 - r^1.5) / (r^2 - 1) of the
+    finer mesh's error, and the two-grid GCI (Fs = 3) covers it."""
+    from rotorflow.postprocess.richardson import GCI_SAFETY_TWO_GRIDS, two_grid
+
+    f0, c = 7.0e-4, 1.2e-4
+    exact = two_grid([f0 + c, f0 + c / ratio**2], ratio, order=2.0)
+    assert exact.extrapolated == pytest.approx(f0, rel=1e-12)
+    assert exact.uncertainty == pytest.approx(
+        GCI_SAFETY_TWO_GRIDS * (c - c / ratio**2) / (ratio**2 - 1) / f0, rel=1e-9)
+    off = two_grid([f0 + c, f0 + c / ratio**1.5], ratio)
+    medium_error = c / ratio**1.5
+    share = (ratio**2 - ratio**1.5) / (ratio**2 - 1)
+    assert off.extrapolated - f0 == pytest.approx(share * medium_error, rel=1e-9)
+    assert abs(off.extrapolated / f0 - 1) < off.uncertainty
+    with pytest.raises(ValueError, match="two values"):
+        two_grid([1.0, 2.0, 3.0], ratio)

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from .films import polar_moment
 from .forces import power_split
 from .machine import SweptMachine
 from .section import POINTS_PER_PERIOD
@@ -201,6 +202,18 @@ def case_port_timing(case, m: SweptMachine):
                        None if do is None else math.radians(do), early)
 
 
+def _groove(rotor, area: float) -> dict[str, float]:
+    """The rotor's grooves in its transverse section (its tip circle less its section):
+    their area and their radius of gyration about the rotor's axis, sqrt(int r^2 dA / A),
+    for the liquid they carry (:func:`rotorflow.quasi1d.mechanical.liquid_acceleration_W`).
+    """
+    tip = float(rotor.profile.radius_max)
+    groove = math.pi * tip**2 - area
+    moment = 0.5 * math.pi * tip**4 - abs(float(polar_moment(rotor.profile)))
+    return {f"groove_area_{rotor.name}_m2": groove,
+            f"groove_gyration_{rotor.name}_m": math.sqrt(moment / groove)}
+
+
 def _rotor_loads(m: SweptMachine) -> tuple[dict, dict]:
     """The gas-load columns and per-rotor scalars of the chamber table (see :mod:`.table`).
 
@@ -227,6 +240,8 @@ def _rotor_loads(m: SweptMachine) -> tuple[dict, dict]:
             scalars[f"axial_per_torque_{name}_per_m"] = float(
                 rotor.speed_ratio * sw.wrap / sw.length)
         area = abs(float(rotor.profile.area))
+        if rotor.material_inside and sw.kind in ("straight", "helical"):
+            scalars.update(_groove(rotor, area))
         if not rotor.material_inside:
             bores = [rad for centre, rad in pair.casing_bores()
                      if np.allclose(centre, rotor.axis)]

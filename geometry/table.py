@@ -51,7 +51,11 @@ and the per-rotor scalars ``rotor_scalars`` (absent where undefined):
 face the discharge pressure acts on), and ``axial_per_torque_NAME_per_m``, the axial
 force of the fluid on the rotor's flanks per unit of the fluid's torque on it (1/m,
 +z from the low- to the high-pressure end); defined for constant lead (straight: 0).
-A table without them (older side-cars, one-chamber test tables) has no gas loads.
+A table without these two (older side-cars, one-chamber test tables) has no gas loads.
+``groove_area_NAME_m2`` and ``groove_gyration_NAME_m``: the transverse area of the
+grooves of a rotor whose material lies inside its profile (its tip circle less its
+section) and their radius of gyration about its axis (straight and helical sweeps), for
+the angular momentum of the liquid they carry.
 
 Oil films.  ``oil_films`` (optional) lists the rotor surfaces that shear an oil film
 against the casing, each naming the leakage path whose clearance it has
@@ -322,7 +326,8 @@ class ChamberTable:
 
 
 _FAR = re.compile(r"seal_(next|prev)(\d+)_m")
-_ROTOR_SCALAR = re.compile(r"(end_area_\w+_m2|axial_per_torque_\w+_per_m)")
+_ROTOR_SCALAR = re.compile(
+    r"(end_area_\w+_m2|axial_per_torque_\w+_per_m|groove_area_\w+_m2|groove_gyration_\w+_m)")
 
 
 def write(table: ChamberTable, csv_path: Path) -> None:

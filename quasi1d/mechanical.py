@@ -27,6 +27,24 @@ torque ``seal_torque_Nm``.  Default 0 (no seal modelled): SKF's radial shaft sea
 give lip-seal friction only as a diagram of power loss against shaft diameter and speed,
 which is not transcribed here; take the torque from the seal maker's data.
 
+Injected liquid (a compressor's oil, a multiphase pump's liquid): the rotors set it
+turning.  It enters the grooves from the suction port without swirl and leaves them at
+the discharge turning with the rotor, so by Euler's turbomachinery equation (torque =
+mass flow x the angular momentum per kg it leaves with; e.g. Dixon & Hall, Fluid
+Mechanics and Thermodynamics of Turbomachinery, ch. 1) the shaft gives it
+
+    P = m_l sum_r s_r omega_r^2 k_r^2
+
+(:func:`liquid_acceleration_W`): k_r the radius of gyration of rotor r's grooves about
+its axis (the liquid spread over the groove's section, as the homogeneous chamber model
+has it), s_r the share of the liquid rotor r carries, its grooves' share of the volume
+swept, A_r |omega_r| / sum A |omega|.  Half of P is the kinetic energy the liquid
+leaves with, half is lost in the impact as it is taken up; nothing is taken as
+recovered at the discharge.  Not modelled: the liquid's drag in the grooves (churning)
+and a swirl it enters with.  It needs the rotors' grooves in the table
+(``groove_area_NAME_m2``, ``groove_gyration_NAME_m``: rotors with their material inside
+their profile, twin screws); without them the figures list it under ``not_modelled``.
+
 Injected oil: its viscous shear in the rotor-casing clearances is :mod:`.oil_film`'s,
 from the oil's datasheet viscosities given here (``oil_viscosity_40C_cSt``,
 ``oil_viscosity_100C_cSt``, ``oil_density_kg_m3``); without them, or on a table that
@@ -139,3 +157,20 @@ def mechanical_loss(loads, mech: Mechanical, diameter_m: float, omega_driven: fl
         bearings[r.name] = float(moment * omega)
     return MechanicalLoss(bearings, float(mech.seal_torque_Nm * abs(omega_driven)), d,
                           tuple(missing))
+
+
+def liquid_acceleration_W(flow_kg_s: float, loads, scalars: dict) -> float | None:
+    """The power that turns ``flow_kg_s`` of injected liquid up to the rotors' speed
+    (module docstring), ``loads`` giving the rotors and their speeds, ``scalars`` the
+    table's per-rotor scalars; None where a rotor's grooves are not in them."""
+    grooves = []
+    for r in loads.rotors:
+        area = scalars.get(f"groove_area_{r.name}_m2")
+        radius = scalars.get(f"groove_gyration_{r.name}_m")
+        if area is None or radius is None:
+            return None
+        grooves.append((area, radius, abs(r.speed_ratio * loads.omega_ref)))
+    swept = sum(a * w for a, _, w in grooves)
+    if swept <= 0.0:
+        return 0.0
+    return float(flow_kg_s * sum(a * w * (w * k) ** 2 for a, k, w in grooves) / swept)

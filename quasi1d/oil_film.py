@@ -31,7 +31,8 @@ leakage and the shear).  Assumed, and stated with the figures:
   discharged gas and oil;
 * not modelled: shear in the interlobe gap between the rotors (the sliding speed along
   the contact is not in the table), the suction port's share of the suction-end face
-  (the face is counted whole), the momentum the rotors give the injected oil.
+  (the face is counted whole); the momentum the rotors give the injected oil is
+  :func:`.mechanical.liquid_acceleration_W`'s.
 """
 
 from __future__ import annotations
@@ -100,5 +101,5 @@ def oil_film_loss(films, gaps: dict, omegas: dict, length: float, oil, T_film: f
             continue
         out[f"{f.rotor} {f.path}"] = film_dissipation(f, omegas[f.rotor], mu, gap, length)
     missing += ["shear in the interlobe gap", "the suction port's share of the suction-end "
-                "face", "momentum given to the injected oil"]
+                "face"]
     return OilFilmLoss(out, mu, T_film, tuple(missing))

@@ -5,7 +5,9 @@ efficiencies there are indicated):
 
     shaft_power_W               indicated power + mechanical loss, at the driven shaft
     mechanical_loss_W           bearing and seal friction (:mod:`.mechanical`) and, with
-                                oil injected, the oil films' shear (:mod:`.oil_film`)
+                                oil or a liquid injected, the oil films' shear
+                                (:mod:`.oil_film`) and the liquid's acceleration to the
+                                rotors' speed (:func:`.mechanical.liquid_acceleration_W`)
     adiabatic_efficiency_shaft  mass flow * isentropic work / shaft power
     loads                       per rotor (``rotors``): radial gas force mean and max (N),
                                 axial gas force mean and max |F| (N; None where undefined)
@@ -19,7 +21,8 @@ efficiencies there are indicated):
                                 power - 1|
     mechanical                  bearing bore used, seal loss, the oil films' loss per
                                 surface with the viscosity and film temperature used and
-                                the discharge heating it would add, what is not modelled
+                                the discharge heating it would add, the liquid's
+                                acceleration (W), what is not modelled
 
 All None when the chamber table carries no gas loads (:func:`.loads.has_loads`).
 """
@@ -31,7 +34,7 @@ import math
 import numpy as np
 
 from .loads import GasLoads, RotorLoads, gas_loads
-from .mechanical import Mechanical, mechanical_loss
+from .mechanical import Mechanical, liquid_acceleration_W, mechanical_loss
 from .oil_film import OilFilmLoss, oil_film_loss
 from .result import SimulationResult
 
@@ -78,7 +81,10 @@ def shaft_figures(result: SimulationResult, table, mech: Mechanical) -> tuple[di
     loss = mechanical_loss(loads, mech, float(table.diameter_m), omega_driven)
     fig = result.figures
     film, film_figures = _oil_films(result, table, mech, loads)
-    total_loss = loss.total_W + (0.0 if film is None else film.total_W)
+    liquid_flow = max(float(fig.get("oil_flow_kg_s") or 0.0), 0.0)
+    lift = liquid_acceleration_W(liquid_flow, loads, table.rotor_scalars) \
+        if liquid_flow > 0.0 else 0.0
+    total_loss = loss.total_W + (0.0 if film is None else film.total_W) + (lift or 0.0)
     shaft = fig["indicated_power_W"] + total_loss
     eta = fig["adiabatic_efficiency"]
     rotors = {r.name: {**rotor_figures(loads, r), "bearing_loss_W": loss.bearings_W[r.name]}
@@ -91,9 +97,12 @@ def shaft_figures(result: SimulationResult, table, mech: Mechanical) -> tuple[di
         else eta * fig["indicated_power_W"] / shaft,
         "loads": {"power_balance_error": loads.power_balance_error, "rotors": rotors},
         "mechanical": {"bearing_bore_m": loss.bore_m, "seal_loss_W": loss.seal_W,
-                       **film_figures,
+                       **film_figures, "liquid_acceleration_W": lift,
                        "not_modelled": list(loss.not_modelled) + (
-                           [] if film is None else list(film.not_modelled))},
+                           [] if film is None else list(film.not_modelled)) + (
+                           [] if lift is not None else
+                           ["acceleration of the injected liquid to the rotors' speed (the "
+                            "table gives no rotor grooves)"])},
     }, loads
 
 

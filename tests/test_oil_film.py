@@ -143,7 +143,8 @@ def _simulate(case):
 def test_the_4_6_machine_books_its_films_at_their_paths_clearances(tmp_path):
     """The 4/6 of seed 004 (oil-flooded) with the end faces' clearance doubled: per unit
     viscosity (the film temperature follows the cycle) the face films halve exactly, the
-    tip films stay; the mechanical loss is bearings, seal and films."""
+    tip films stay; the mechanical loss is bearings, seal, films and the oil's
+    acceleration to the rotors' speed."""
     text = (CASES / "twin_screw_4_6.toml").read_text()
     base = tmp_path / "base.toml"
     base.write_text(text)
@@ -154,7 +155,8 @@ def test_the_4_6_machine_books_its_films_at_their_paths_clearances(tmp_path):
         mech = fig["mechanical"]
         bearings = sum(r["bearing_loss_W"] for r in fig["loads"]["rotors"].values())
         assert fig["mechanical_loss_W"] == pytest.approx(
-            bearings + mech["seal_loss_W"] + sum(mech["oil_film_W"].values()), rel=1e-12)
+            bearings + mech["seal_loss_W"] + sum(mech["oil_film_W"].values())
+            + mech["liquid_acceleration_W"], rel=1e-12)
         assert fig["shaft_power_W"] == pytest.approx(
             fig["indicated_power_W"] + fig["mechanical_loss_W"], rel=1e-12)
     mu_a = a["mechanical"]["oil_film_viscosity_Pa_s"]

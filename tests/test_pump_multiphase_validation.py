@@ -60,11 +60,14 @@ def test_predicted_power_within_target_at_the_top_corner():
     assert r["predicted"] and abs(r["power_error"]) <= pm.POWER_TOL, r
 
 
-@pytest.mark.xfail(strict=True, reason="power -18..-19 % at 1501 rpm: the taken-over volume "
-                   "ratio 2 gives dP/dp_d = V/2, the table's slope is 0.62 V (vi ~ 1.6)")
 @pytest.mark.parametrize("key", [(4.0, 1501.0), (14.0, 1501.0)])
 def test_predicted_power_within_target(key):
-    assert abs(results()[key][0]["power_error"]) <= pm.POWER_TOL
+    """At 1501 rpm the indicated power alone is 18-19 % short: the shaft also turns the
+    water up to the rotors' speed (1.5 kW at 1501 rpm, Euler's equation; before it was
+    modelled these rows were strict xfails); 14 bar stays the tightest row (-14.9 %)."""
+    r, f = results()[key]
+    assert f["power_kW"] - f["indicated_kW"] > 1.0  # bearings alone: ~0.2 kW
+    assert abs(r["power_error"]) <= pm.POWER_TOL
 
 
 def test_efficiency_trends_have_the_tables_sign():

@@ -168,7 +168,7 @@ def run_angle(case, table, phi: float, settings: StudySettings, gap: float, runs
     ref = next(iter(states.values()))
     closed = [s for s, c in zip(slot_of(ref, phi, period, origin), ref.closed, strict=True)
               if c]
-    record = {"angle_deg": math.degrees(phi), "ratio": settings.ratio, "closed": closed,
+    record = {"angle_deg": round(math.degrees(phi), 9), "ratio": settings.ratio, "closed": closed,
               "models": {}, "runs": [], "grids": []}
     for name, state in states.items():
         pairs, total = model_flows(state, phi, period, origin, paths)

@@ -164,7 +164,8 @@ def write(angles: list[dict], out_dir: Path) -> dict:
     quick = result["two_grid"]
     lines.append("\nthe coarse and medium grids alone (two-grid Richardson at order 2) "
                  "against the three-grid extrapolation, largest error: "
-                 + ", ".join(f"{k} {q['max_abs']:.2%} ({q['count']})"
+                 + ", ".join(f"{k} {q['max_abs']:.2%} ({q['count']})" if q["count"]
+                             else f"{k} none converges monotonically"
                              for k, q in quick.items()))
     (out_dir / "machine_errors.md").write_text("\n".join(lines) + "\n")
     (out_dir / "machine_summary.json").write_text(json.dumps(result, indent=2) + "\n")

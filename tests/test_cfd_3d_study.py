@@ -123,10 +123,30 @@ def test_comparison_extrapolates_and_finds_the_closest_model(tmp_path):
         assert r["convergence"] == "monotone" and r["order"] == pytest.approx(2.0, rel=1e-9)
     result = machine_compare.write([record], tmp_path)
     assert result["closest_model"] == "near"
+    assert result["closest_by_kind"] == dict.fromkeys(("pressure", "path", "leakage"), "near")
     assert result["models"]["near"]["all"]["max_abs"] == pytest.approx(0.01, rel=1e-9)
     assert result["models"]["far"]["leakage"]["rms"] == pytest.approx(0.2, rel=1e-9)
     text = (tmp_path / "machine_errors.csv").read_text().splitlines()
     assert len(text) == 1 + len(rows)
+
+
+def test_the_closest_model_is_named_per_kind_too(tmp_path):
+    """Over all quantities the paths outnumber the pressures: a model exact on the paths
+    and the total but 10 % off in pressure is closest overall, one exact in pressure
+    and 50 % off on the paths is closest on pressures."""
+    exact = {"p4": 2.0e5, "f34": -4.0e-4, "f45": -4.0e-4, "f67": 3.0e-4, "total": 8.0e-4}
+
+    def model(p_scale, f_scale):
+        return {"pressures": {"4": exact["p4"] * p_scale}, "total": exact["total"] * f_scale,
+                "pairs": {"3,4": exact["f34"] * f_scale, "4,5": exact["f45"] * f_scale,
+                          "6,7": exact["f67"] * f_scale}}
+
+    record = _record(exact, 2.0, 1.5, {"flows": model(1.1, 1.0), "pressure": model(1.0, 1.5)})
+    result = machine_compare.write([record], tmp_path)
+    assert result["closest_model"] == "flows"
+    assert result["closest_by_kind"] == {"pressure": "pressure", "path": "flows",
+                                         "leakage": "flows"}
+    assert "pressure pressure" in (tmp_path / "machine_errors.md").read_text()
 
 
 def test_quick_estimate_of_two_grids_against_the_three_grid_value(tmp_path):

@@ -198,20 +198,35 @@ def _build(m: FrozenMachine, controls: Controls, dec: Decomposition, label: str,
     return parallel_plan(replace(plan, solve=solve), folder, dec), built
 
 
+def recorded_run(m: FrozenMachine, case_dir: Path, controls: Controls = Controls()
+                 ) -> MachineRun | None:
+    """The finished run of ``m`` in ``case_dir`` under the key :func:`run_machine_case`
+    gives it (None: not finished, or another case): a recorded study read back without
+    OpenFOAM."""
+    _, key = _keyed(m, controls)
+    return foam_case.stored_result(case_dir, key, MachineRun.from_json)
+
+
+def _keyed(m: FrozenMachine, controls: Controls) -> tuple[FrozenMachine, str]:
+    """``m`` as the controls run it, and its key."""
+    m = replace(m, iterations=controls.max_iterations)
+    return m, case_key(m, controls)
+
+
 def run_machine_case(m: FrozenMachine, case_dir: Path, controls: Controls = Controls(),
                      decomposition: Decomposition = SERIAL, *, reuse: bool = True,
                      label: str | None = None) -> MachineRun:
     """Build, run and judge ``m`` in ``case_dir`` (reused when its key matches); a grid
     that cannot be made raises CaseError naming ``label`` (default: the angle)."""
     label = label or f"rotor angle {math.degrees(m.phi):.6g} deg"
-    m = replace(m, iterations=controls.max_iterations)
+    m, key = _keyed(m, controls)
 
     def judged(folder, built, values, elapsed, failure):
         return judge(folder, built, controls, decomposition.processes, values, elapsed,
                      failure)
 
     return foam_case.run_case(
-        case_dir, case_key(m, controls),
+        case_dir, key,
         functools.partial(_build, m, controls, decomposition, label), judged,
         MachineRun.from_json, reuse=reuse, label="machine case",
         summary=lambda r: (f"{r.status} {r.message}, {r.cells} cells, leakage "

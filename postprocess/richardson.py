@@ -39,12 +39,13 @@ GCI_SAFETY = 1.25
 GCI_SAFETY_TWO_GRIDS = 3.0
 
 #: The formal order of the finite-volume schemes here (linear interpolation, central
-#: gradients): what :func:`two_grid` assumes unless told otherwise.
+#: gradients): the most the extrapolation uses, and what :func:`two_grid` assumes
+#: unless told otherwise.
 FORMAL_ORDER = 2.0
 
 #: Orders used to extrapolate: at least first order (every scheme here is), at most the
 #: formal second order of the finite-volume discretisation.
-ORDER_BOUNDS = (1.0, 2.0)
+ORDER_BOUNDS = (1.0, FORMAL_ORDER)
 
 #: Two mesh values closer than this fraction count as equal: the iterative convergence of
 #: the solutions (mass flow settled to ~1e-4) makes smaller differences noise.

@@ -15,13 +15,12 @@ would break that (the check can fail).
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import pytest
 
-from rotorflow.cases import foam_case, machine_study
+from rotorflow.cases import machine_study
 from rotorflow.cases.chamber_case import _resolve
-from rotorflow.cases.machine_run import MachineRun, case_key
+from rotorflow.cases.machine_run import recorded_run
 from rotorflow.cases.machine_setup import case_table
 from rotorflow.postprocess import machine_compare
 from rotorflow.postprocess.richardson import richardson, two_grid
@@ -37,8 +36,7 @@ TARGET = 0.02
 
 
 def _recorded(m, case_dir, controls, decomposition=None, **_):
-    m = replace(m, iterations=controls.max_iterations)  # as run_machine_case keys it
-    run = foam_case.stored_result(case_dir, case_key(m, controls), MachineRun.from_json)
+    run = recorded_run(m, case_dir, controls)
     assert run is not None, f"no recorded run with this key in {case_dir}: rerun the study"
     return run
 

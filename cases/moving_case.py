@@ -6,18 +6,23 @@ walls), the cellZones of the chambers at the start angle (:mod:`.machine_zones`;
 columns, at most :data:`.moving_section.GAP_COLUMN_RATIO` clearances long, go to the zone
 ``gaps`` instead), the faceZones of the sealing lines between chambers, and the key
 frames' displacements ``keyDisplacement`` in their time folders.  rhoPimpleFoam, laminar,
-perfect gas, closed (no ports), at rest at the start, a fixed time step dividing the
-key-frame interval.  Walls: on the rotors, each rotor's own omega x r tangentially and
-the mesh's motion normally (:mod:`.moving_walls`: ``timeVaryingMappedFixedValue`` of
-samples exact for the fixed step, so no gas crosses a wall), ``slip`` on front and
-back.
+perfect gas, at rest at the start, a fixed time step dividing the key-frame interval.
+Walls: on the rotors, each rotor's own omega x r tangentially and the mesh's motion
+normally (:mod:`.moving_walls`: ``timeVaryingMappedFixedValue`` of samples exact for the
+fixed step, so no gas crosses a wall).  Closed (no ports): ``slip`` on front and back.
+With ports (``MovingSection.ports``, :mod:`.moving_ports`): the end faces are the
+patches ``back`` (suction) and ``front`` (discharge), each face port or plate by its
+centre's position at every evaluation.
 
 Written every time step (``postProcessing``): the mass in the domain, each chamber's
 volume-averaged pressure, the flow through each sealing faceZone, and the largest Courant
-number in the gap cells and in the whole domain.  :func:`judge` accepts a run
+number in the gap cells and in the whole domain; with ports, the flow through
+``back`` and ``front`` (their plate faces carry none).  :func:`.moving_run.judge`
+accepts a run
 ("completed") that reached its end time with finite pressures, a largest Courant
 number at most ``max_courant`` (the step is fixed, so nothing else holds it) and a mass
-that stayed within ``mass_tol`` of its start (closed domain); otherwise the run is
+that stayed within ``mass_tol`` of its start (closed domain) or of its start plus what
+came in through the ports (:func:`.moving_run.mass_balance`); otherwise the run is
 "incomplete", "inconsistent", "diverged" or "crashed", kept with its log tail and never
 used.  The per-step chamber pressures are those of the start angle's zones; over more
 than a few degrees take them from the grid's topology at written frames
@@ -27,8 +32,7 @@ than a few degrees take them from the grid's topology at written frames
 from __future__ import annotations
 
 import functools
-import json
-import math
+import hashlib
 import shutil
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
@@ -37,13 +41,12 @@ from typing import Any
 
 import numpy as np
 
-from rotorflow.errors import CaseError, ExternalRunError
+from rotorflow.errors import CaseError
 from rotorflow.geometry.sweep import Sweep
-from rotorflow.postprocess.foam_output import function_object_table
 
-from . import foam_case, moving_walls
+from . import foam_case, moving_ports, moving_walls
 from .foam import Step
-from .foam_case import Plan, count_time_steps
+from .foam_case import Plan
 from .foam_dicts import (
     control_dict,
     field_value,
@@ -55,11 +58,11 @@ from .foam_files import write_dict, write_field
 from .foam_mesh import judge_check_mesh
 from .machine_case import seal_name, slot_name
 from .machine_zones import chamber_zones, seal_faces, write_zones
+from .moving_run import SOLVER, MovingRun, end_fields, judge  # noqa: F401 (the runner's API)
 from .moving_section import GAP_COLUMN_RATIO, MovingSection, checked_frames, wall_velocity_check
 from .ogrid_quality import QualityLimits
 from .polymesh import HEADER, build_polymesh, write_mesh
 
-SOLVER = "rhoPimpleFoam"
 FIELD = "keyDisplacement"
 ROTORS = ("innerRotor", "outerRotor")
 ENDS = "frontAndBack"
@@ -85,7 +88,8 @@ class RunControls:
     #: times, where the grid is known exactly: the chambers' pressures are taken from the
     #: grid's own topology there (:mod:`.moving_chambers`).
     write_every_frames: int = 0
-    #: Mass of the closed domain: relative change allowed over the run (issue 17's 1e-4
+    #: Mass of the closed domain, or of the ported one less what its ports let through
+    #: (:func:`mass_balance`): relative change allowed over the run (issue 17's 1e-4
     #: over a revolution).
     mass_tol: float = 1e-4
     timeout_s: float | None = None
@@ -100,6 +104,7 @@ class Built:
     duration: float
     interpolation: dict  # :func:`.moving_section.interpolation_error`
     wall_velocity: dict  # imposed (:func:`.moving_walls.check`) and the grid's sliding
+    ports: tuple = ()  # the port patches, empty when closed
 
 
 def _frame_name(t: float) -> str:
@@ -161,7 +166,8 @@ def write_case(s: MovingSection, case_dir: Path, controls: RunControls = RunCont
     between them are checked before the first file is written: a degenerate frame is a
     CaseError and nothing is written."""
     grids, error = checked_frames(s)
-    mesh = build_polymesh([grids[0], grids[0]], np.array([0.0, s.depth]), _ends)
+    mesh = build_polymesh([grids[0], grids[0]], np.array([0.0, s.depth]),
+                          moving_ports.end_patches if s.ports else _ends)
     by_slot, seals, gap_cells = _zones(s, grids[0], mesh)
     cell_zones = {k if k == "gaps" else slot_name(k): v for k, v in by_slot.items()}
     case_dir = Path(case_dir)
@@ -171,8 +177,9 @@ def write_case(s: MovingSection, case_dir: Path, controls: RunControls = RunCont
     _write_frames(case_dir, s, grids, patches)
     walls = _write_walls(s, case_dir, grids, mesh, controls.steps_per_frame)
     slots = tuple(k for k in by_slot if k != "gaps")
+    ports = moving_ports.PATCHES if s.ports else ()
     _write_dicts(s, case_dir, controls, [slot_name(c) for c in slots],
-                 [seal_name(a, b) for a, b in seals])
+                 [seal_name(a, b) for a, b in seals], ports)
     cells = int(mesh[2].max()) + 1
     _write_fields(s, case_dir, cells, cell_zones, patches)
     plan = Plan(setup=(Step(("checkMesh",), then=functools.partial(
@@ -180,7 +187,7 @@ def write_case(s: MovingSection, case_dir: Path, controls: RunControls = RunCont
         max_aspect_ratio=QualityLimits().max_aspect_ratio)),),
         solve=Step((SOLVER,), timeout_s=controls.timeout_s))
     return plan, Built(cells, slots, tuple(seals), gap_cells, s.duration, error,
-                       {**walls, "grid_sliding": wall_velocity_check(s, grids)})
+                       {**walls, "grid_sliding": wall_velocity_check(s, grids)}, ports)
 
 
 def _rotor(s: MovingSection, patch: str):
@@ -208,7 +215,7 @@ def _write_walls(s: MovingSection, case_dir: Path, grids, mesh, steps: int) -> d
 
 
 def _write_dicts(s: MovingSection, case_dir: Path, c: RunControls, chambers: list,
-                 seals: list) -> None:
+                 seals: list, ports: tuple = ()) -> None:
     def fo(kind, region, op, fields, name=None):
         return field_value(kind, region, op, fields, write_control="timeStep",
                            write_interval=1, name=name)
@@ -224,6 +231,8 @@ def _write_dicts(s: MovingSection, case_dir: Path, c: RunControls, chambers: lis
                   for z in chambers}
     functions |= {f"flow_{z}": fo("surfaceFieldValue", "faceZone", "sum", ["phi"], z)
                   for z in seals}
+    functions |= {f"port_{z}": fo("surfaceFieldValue", "patch", "sum", ["phi"], z)
+                  for z in ports}
     system, constant = case_dir / "system", case_dir / "constant"
     frame_dt = s.duration / s.frames
     write_dict(system / "controlDict", control_dict(
@@ -270,110 +279,59 @@ def _write_dicts(s: MovingSection, case_dir: Path, c: RunControls, chambers: lis
 def _write_fields(s: MovingSection, case_dir: Path, cells: int, cell_zones: dict,
                   patches: list) -> None:
     zero = case_dir / "0"
-    p = np.full(cells, s.p0)
-    for slot, value in (s.initial_p or {}).items():
-        if slot_name(slot) in cell_zones:
-            p[cell_zones[slot_name(slot)]] = value
+    p, T, U = _start_state(s, cells, cell_zones)
     grad = {name: {"type": "zeroGradient"} for name in patches}
-    write_field(zero / "p", (1, -1, -2), p, grad)
-    write_field(zero / "T", (0, 0, 0, 1), s.T0, grad)
+    ends = moving_ports.boundary_fields(s.ports, s.p0, s.T0) if s.ports else {
+        "p": {}, "T": {}, "U": {ENDS: {"type": "slip"}}}
+    write_field(zero / "p", (1, -1, -2), p, grad | ends["p"])
+    write_field(zero / "T", (0, 0, 0, 1), T, grad | ends["T"])
     u0 = np.zeros(3)
     # the samples are the faces' own centres: "nearest" maps each onto its face
     walls = {"type": "timeVaryingMappedFixedValue", "mapMethod": "nearest",
              "setAverage": False, "value": u0}
-    write_field(zero / "U", (0, 1, -1), u0, vector=True, boundary={
-        **{r: walls for r in ROTORS}, ENDS: {"type": "slip"}})
+    write_field(zero / "U", (0, 1, -1), U, vector=True, boundary={
+        **{r: walls for r in ROTORS}, **ends["U"]})
     motion = {"type": "uniformInterpolatedDisplacement", "field": FIELD,
               "interpolationScheme": "linear", "value": u0}
     write_field(zero / "pointDisplacement", (0, 1), u0, {name: motion for name in patches},
                 vector=True, point=True)
 
 
-@dataclass(frozen=True)
-class MovingRun:
-    """What a moving-section run produced.  Use only runs with :attr:`ok`."""
-
-    status: str  # completed, incomplete, inconsistent, diverged or crashed
-    message: str
-    cells: int
-    gap_cells: int
-    end_time_s: float
-    time_steps: int
-    run_time_s: float
-    mass_drift: float  # max |m(t) / m(0) - 1|
-    max_gap_courant: float
-    max_courant: float
-    min_dt_s: float
-    chamber_p: dict  # str(slot) -> [p at every step], Pa
-    times_s: list
-    interpolation: dict
-    wall_velocity: dict
-    log_tail: str = ""
-
-    @property
-    def ok(self) -> bool:
-        return self.status == "completed"
-
-    def to_json(self) -> str:
-        return json.dumps(asdict(self), indent=1, allow_nan=True) + "\n"
-
-    @classmethod
-    def from_json(cls, text: str) -> MovingRun:
-        return cls(**json.loads(text))
-
-
-def _series(case_dir: Path, name: str, kind: str = "volFieldValue") -> np.ndarray:
-    return function_object_table(case_dir, name, f"{kind}.dat")[1][:, :2]
-
-
-def judge(case_dir: Path, built: Built, controls: RunControls, elapsed: float,
-          failure: str) -> MovingRun:
-    """The run's result from its tables (see the module docstring)."""
-    got: dict[str, Any] = {"end_time_s": math.nan, "mass_drift": math.nan,
-                           "max_gap_courant": math.nan, "max_courant": math.nan,
-                           "min_dt_s": math.nan, "chamber_p": {}, "times_s": []}
-    outcome: tuple[str, str] | ExternalRunError
-    try:
-        mass = _series(case_dir, "mass")
-        t = mass[:, 0]
-        pressures = {str(c): _series(case_dir, f"p_{slot_name(c)}")[:, 1].tolist()
-                     for c in built.chambers}
-        dt = np.diff(np.concatenate([[0.0], t]))
-        got = {"end_time_s": float(t[-1]),
-               "mass_drift": float(np.max(np.abs(mass[:, 1] / mass[0, 1] - 1.0))),
-               "max_gap_courant": float(_series(case_dir, "Co_gaps")[:, 1].max()),
-               "max_courant": float(_series(case_dir, "Co_all")[:, 1].max()),
-               "min_dt_s": float(dt.min()), "chamber_p": pressures, "times_s": t.tolist()}
-        values = np.concatenate([mass[:, 1], *map(np.asarray, pressures.values())])
-        if not (np.all(np.isfinite(values)) and values.min() > 0.0):
-            outcome = ("diverged", "non-finite or negative mass or pressure")
-        elif t[-1] < built.duration * (1.0 - 1e-9):
-            outcome = ("incomplete", f"stopped at {t[-1]:.6g} s of {built.duration:.6g} s")
-        elif not got["max_courant"] <= controls.max_courant:
-            outcome = ("inconsistent", f"Courant number {got['max_courant']:.3g} above "
-                       f"{controls.max_courant:g}")
-        elif not got["mass_drift"] <= controls.mass_tol:
-            outcome = ("inconsistent", f"mass of the closed domain drifts by "
-                       f"{got['mass_drift']:.2e}, above {controls.mass_tol:g}")
-        else:
-            outcome = ("completed", "")
-    except ExternalRunError as exc:
-        outcome = exc
-    v = foam_case.verdict(case_dir, SOLVER, failure, outcome, ok="completed")
-    return MovingRun(
-        status=v.status, message=v.message, cells=built.cells, gap_cells=built.gap_cells,
-        time_steps=count_time_steps(case_dir / f"log.{SOLVER}"), run_time_s=elapsed,
-        interpolation=built.interpolation, wall_velocity=built.wall_velocity,
-        log_tail=v.log_tail, **got)
+def _start_state(s: MovingSection, cells: int, cell_zones: dict):
+    """(p, T, U) of the cells at the start: ``initial_fields`` whole, else p0 and T0 with
+    the named chambers' own values."""
+    if s.initial_fields is not None:
+        f = s.initial_fields
+        p, T, U = (np.asarray(f[k], float) for k in ("p", "T", "U"))
+        if p.shape != (cells,) or T.shape != (cells,) or U.shape != (cells, 3):
+            raise CaseError(f"the start fields hold {p.size} cells, the grid {cells}: "
+                            "not the same grid")
+        return p, T, U
+    p, T = np.full(cells, s.p0), np.full(cells, s.T0)
+    for values, field_ in ((s.initial_p, p), (s.initial_T, T)):
+        for slot, value in (values or {}).items():
+            if slot_name(slot) in cell_zones:
+                field_[cell_zones[slot_name(slot)]] = value
+    # uniform where nothing varies: a closed run's files stay what they always were
+    return p, (T if s.initial_T else s.T0), np.zeros(3)
 
 
 def case_key(s: MovingSection, controls: RunControls) -> str:
-    return foam_case.digest({
+    key = {
         "pair": s.pair.digest(), "gap": s.gap, "spec": s.spec.key(), "start": s.start,
         "span": s.span, "frames": s.frames, "omega": s.omega_outer, "depth": s.depth,
         "p0": s.p0, "T0": s.T0, "gas": asdict(s.gas),
         "initial_p": sorted((int(k), float(v)) for k, v in (s.initial_p or {}).items()),
-        "controls": asdict(controls)})
+        "controls": asdict(controls)}
+    if s.initial_T:  # keys of runs without them stay what they were
+        key["initial_T"] = sorted((int(k), float(v)) for k, v in s.initial_T.items())
+    if s.initial_fields is not None:
+        key["initial_fields"] = hashlib.sha256(b"".join(
+            np.ascontiguousarray(s.initial_fields[k], float).tobytes()
+            for k in ("p", "T", "U"))).hexdigest()
+    if s.ports:  # a closed section keeps the key it always had
+        key["ports"] = s.ports.key()
+    return foam_case.digest(key)
 
 
 def run_moving_section(s: MovingSection, case_dir: Path,
@@ -396,5 +354,7 @@ def run_moving_section(s: MovingSection, case_dir: Path,
         case_dir, case_key(s, controls), build, judged, MovingRun.from_json, reuse=reuse,
         label="moving section", launch=launch,
         summary=lambda r: (f"{r.status} {r.message}, {r.cells} cells, {r.time_steps} steps, "
-                           f"mass drift {r.mass_drift:.1e}, gap Courant "
+                           f"mass drift {r.mass_drift:.1e}"
+                           + (f", balance {r.mass_balance:.1e}" if r.port_flow else "")
+                           + ", gap Courant "
                            f"{r.max_gap_courant:.3g}, {r.run_time_s:.1f} s"))

@@ -9,7 +9,9 @@ time.  Every patch, front and back included, carries that condition, so every po
 boundary point and follows the prescription exactly (:mod:`.prescribed_motion`, verified).
 The front and back are therefore not ``empty`` (an empty patch's points would be left to
 the Laplacian motion solver) but walls on which the gas slips: one cell thick, the flow is
-two-dimensional all the same.
+two-dimensional all the same.  With ``ports`` (:mod:`.moving_ports`) the back face holds
+the suction port and the front face the discharge port of the product's straight machine
+of the slab's depth.
 
 What is checked before anything is written (:func:`key_frames`):
 
@@ -54,7 +56,9 @@ GAP_COLUMN_RATIO = 3.0
 @dataclass(frozen=True)
 class MovingSection:
     """The section in motion (SI): the pair, its clearance and grid, the angles it turns
-    through, and the gas it holds (closed: no ports)."""
+    through, and the gas it holds: closed, or with ``ports``
+    (:class:`.moving_ports.SectionPorts`: suction on the back face, discharge on the
+    front)."""
 
     pair: Any
     gap: float  # clearance, m
@@ -68,6 +72,12 @@ class MovingSection:
     T0: float = 293.15  # K
     gas: PerfectGas = field(default_factory=PerfectGas)
     initial_p: dict | None = None  # slot -> Pa
+    initial_T: dict | None = None  # slot -> K (T0 elsewhere)
+    #: {"p": (cells,), "T": (cells,), "U": (cells, 3)}: the whole start state, e.g. the
+    #: end of a run of the same grid that stopped at this section's start angle
+    #: (:func:`.moving_case.end_fields`); overrides p0, T0 and the slots' values.
+    initial_fields: dict | None = None
+    ports: Any = None  # .moving_ports.SectionPorts, or None: closed
 
     def check(self) -> None:
         if not self.gap > 0.0:
@@ -79,6 +89,8 @@ class MovingSection:
             raise CaseError("the rotor speed and the slab depth must be positive")
         if not self.p0 > 0.0 or not self.T0 > 0.0:
             raise CaseError("the start pressure and temperature must be positive")
+        if self.ports is not None:
+            self.ports.check()
 
     @property
     def frame_angles(self) -> np.ndarray:

@@ -1,0 +1,169 @@
+"""The quasi-1D model of the section in motion with its ports open (issue 17), for the
+comparison with a ported run of :mod:`.moving_case`.
+
+With ports the slab is what the product models anyway: a straight machine as long as the
+slab is deep, the suction port on its low-pressure end plate (the CFD's back face) and
+the discharge port on its high-pressure one (the front face), each the product's own port
+(:func:`rotorflow.geometry.ports.ports`; the CFD opens the faces inside those polygons).
+So, unlike the closed section (:mod:`.moving_quasi1d`, which carries every chamber
+through its vanishing), the product's cycle runs unchanged: :func:`ported_models` is its
+periodic state under each leakage model, end faces sealed (the slab has no end
+clearances), the rotors' drag in the gaps on, the CFD's perfect gas and plenums.
+
+A periodic state is the same for every chamber shifted by a lobe period, so the CFD's
+slot ``s`` (the chamber of machine age ``phi + s * period``, :mod:`.moving_chambers`) at
+machine angle ``phi`` is the model's chamber at table age ``phi + s * period - origin``
+(:func:`slot_pressures`).  The same map gives the CFD its starting state
+(:func:`initial_state`): every chamber at the model's periodic pressure and temperature,
+so that the run starts near its own periodic state and the turns it needs to reach it are
+few (how few is measured, :func:`periodicity`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rotorflow.errors import CaseError
+
+#: Ports of the product's model for the comparison: "ideal" is the chamber at the
+#: plenum's pressure while open, as the CFD's port faces, held at the plenum pressure
+#: over the whole open face section, come close to; "nozzle" throttles.
+PORT_MODEL = "ideal"
+
+
+@dataclass(frozen=True)
+class PortedModel:
+    result: object  # rotorflow.quasi1d.result.SimulationResult (periodic state)
+    origin: float  # machine angle at table age zero, rad
+    period: float  # lobe period, rad (outer rotor)
+    chambers: int  # N, the outer rotor's lobes
+    plenums: dict  # "suction" / "discharge" -> (p Pa, T K): what the CFD's ports hold
+
+
+def ported_raw(raw: dict, depth: float, gap: float, gas, model: str,
+               correlation: Path | None = None) -> dict:
+    """The case file's sections for the ported slab under leakage ``model``."""
+    from .machine_setup import comparison_raw
+    from .moving_quasi1d import slab_raw
+
+    out = comparison_raw(slab_raw(raw, depth, gap, gas), model, correlation)
+    out["ports"] = {"model": PORT_MODEL}
+    return out
+
+
+def ported_models(raw: dict, where: Path, depth: float, gap: float, gas, models, case_of,
+                  correlation: Path | None = None) -> dict:
+    """{leakage model: PortedModel}: the product's periodic state of the ported slab
+    (the module docstring); ``case_of`` is the workflow's case_from_raw."""
+    from rotorflow.quasi1d.simulate import build_model, case_settings, simulate
+
+    from .machine_setup import case_table, table_origin
+
+    out = {}
+    table = origin = None
+    for name in models:
+        r = ported_raw(raw, depth, gap, gas, name, correlation)
+        case = case_of(r, Path(where))
+        if table is None:  # the leakage model does not change the geometry
+            table, origin = case_table(case), table_origin(case)
+        settings = case_settings(r, str(where))
+        result = simulate(table, *settings)
+        if not result.figures.get("converged", False):
+            raise CaseError(f"the ported slab's quasi-1D cycle under {name!r} did not "
+                            f"converge: {result.figures.get('message', '')}")
+        model = build_model(table, *settings[:4])
+        period = float(model.geo.period)
+        out[name] = PortedModel(result, origin, period, int(round(2 * math.pi / period)),
+                                {"suction": (model.suc.p, model.suc.T),
+                                 "discharge": (model.dis.p, model.dis.T)})
+    return out
+
+
+def _chamber_at(pm: PortedModel, key: str, ages: np.ndarray) -> np.ndarray:
+    """The model's one-chamber trace ``key`` at table ``ages``; NaN outside its life."""
+    ch = pm.result.chamber
+    a = np.asarray(ch["angle_rad"], float)
+    v = np.asarray(ch[key], float)
+    out = np.interp(ages, a, v)
+    return np.where((ages >= a[0]) & (ages <= a[-1]), out, np.nan)
+
+
+def slot_pressures(pm: PortedModel, angles, key: str = "p_Pa") -> np.ndarray:
+    """(len(angles), N): the model's periodic ``key`` of CFD slot s (1..N) at machine
+    ``angles`` (rad): its chamber of table age phi + s P - origin, taken modulo the
+    chamber's turn (NaN while a slot holds no chamber: between death and birth)."""
+    phi = np.asarray(angles, float)[:, None]
+    ages = phi + pm.period * np.arange(1, pm.chambers + 1)[None, :] - pm.origin
+    turn = pm.period * pm.chambers
+    a0 = float(pm.result.chamber["angle_rad"][0])
+    ages = a0 + np.mod(ages - a0, turn)
+    return _chamber_at(pm, key, ages)
+
+
+def initial_state(pm: PortedModel, phi: float) -> tuple[dict, dict]:
+    """({slot: p Pa}, {slot: T K}) of the chambers alive at machine angle ``phi`` in the
+    model's periodic state: the CFD's start."""
+    p = slot_pressures(pm, [phi])[0]
+    T = slot_pressures(pm, [phi], "T_K")[0]
+    live = np.isfinite(p) & np.isfinite(T)
+    return ({s + 1: float(p[s]) for s in np.flatnonzero(live)},
+            {s + 1: float(T[s]) for s in np.flatnonzero(live)})
+
+
+def periodicity(angles_deg, p: dict, period: float) -> dict:
+    """How far a run's chamber pressures are from periodic: slot s at angle phi + P
+    against slot s + 1 at phi (a chamber one lobe period on is where its neighbour was),
+    per pair of slots the largest difference over their common angles as a share of the
+    pressure swing over all slots ({"max": ..., "pairs": {"s": ...}}; empty when the run
+    spans less than a period)."""
+    a = np.radians(np.asarray(angles_deg, float))
+    swing = np.nanmax([np.nanmax(v) for v in p.values()]) - np.nanmin(
+        [np.nanmin(v) for v in p.values()])
+    n = len(p)
+    later = a + period <= a[-1] + 1e-9
+    out = {}
+    for s in range(1, n + 1):
+        here = np.asarray(p[str(s + 1 if s < n else 1)], float)[later]
+        there = np.interp(a[later] + period, a, np.asarray(p[str(s)], float))
+        ok = np.isfinite(here) & np.isfinite(there)
+        if ok.any():
+            out[str(s)] = float(np.abs(there[ok] - here[ok]).max() / swing)
+    return {"max": max(out.values()) if out else math.nan, "pairs": out}
+
+
+
+def join(chunks: list) -> dict:
+    """One topology-pressure record ({"angles_deg", "p"}) of runs that go on from each
+    other's end (:func:`.moving_chambers.topology_pressures` of each, in order): a
+    chunk's first angle is its predecessor's last, kept once."""
+    angles, p = [], {}
+    for k, c in enumerate(chunks):
+        skip = 1 if k and math.isclose(c["angles_deg"][0], angles[-1], abs_tol=1e-9) else 0
+        angles += list(c["angles_deg"][skip:])
+        for slot, v in c["p"].items():
+            p.setdefault(slot, []).extend(v[skip:])
+    return {"angles_deg": angles, "p": p}
+
+
+def comparison(cfd: dict, period: float, models: dict) -> dict:
+    """A ported run's chamber pressures (``cfd``: {"angles_deg", "p"}, from the grid's
+    topology) against the models' periodic state: how far the run is from periodic
+    (:func:`periodicity`), and per model its pressures at the run's angles and their
+    differences (:func:`.moving_chambers.compare`) over the run's last lobe period, the
+    one nearest periodic.  Small, and re-checkable offline."""
+    from .moving_chambers import compare
+
+    angles = np.radians(cfd["angles_deg"])
+    last = angles >= angles[-1] - period - 1e-9
+    tail = {"angles_deg": list(np.asarray(cfd["angles_deg"])[last]),
+            "p": {c: list(np.asarray(v, float)[last]) for c, v in cfd["p"].items()}}
+    rec = {"periodicity": periodicity(cfd["angles_deg"], cfd["p"], period), "models": {}}
+    for name, pm in models.items():
+        p = slot_pressures(pm, angles)
+        rec["models"][name] = {"p": np.where(np.isfinite(p), p, None).tolist(),
+                               "errors": compare(tail, p[last])}
+    return rec

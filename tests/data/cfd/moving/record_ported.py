@@ -1,0 +1,145 @@
+"""Record the ported section in motion towards its periodic state, in chunks (issue 17).
+
+    .venv/bin/python tests/data/cfd/moving/record_ported.py RUNS_DIR GAP_UM [DEGREES]
+
+(needs OpenFOAM).  The default pair of examples/default.toml, a slab 10 mm deep, ports
+and plenums of the case (:mod:`rotorflow.cases.moving_ports`: suction 1 bar / 293 K on
+the back face, discharge 2.6 bar on the front), 2500 rpm outer, from 13 deg.  The first
+chunk starts from the quasi-1D model's periodic state of the same slab
+(:func:`.moving_ported.initial_state`, model START_MODEL); every later one from the
+fields its predecessor ended with (the grids are the same at that angle: the O-grid's
+numbering does not change).  A chunk is CHUNK_DEG of turning; after each, its chamber
+pressures (from the grid's topology at every written frame), its figures and the end
+state are written next to this file (``ported_<GAP>um/``: ``chunks.json``,
+``state.npz``), so that a run cut short goes on from the last chunk.  ``DEGREES``: how
+far to turn in this call (default: up to TOTAL_DEG).  When the chunks span TOTAL_DEG
+the comparison with the models (:func:`.moving_ported.comparison`) is written to
+``ported_<GAP>um.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from rotorflow.cases.moving_case import RunControls, end_fields, run_moving_section
+from rotorflow.cases.moving_chambers import topology_pressures
+from rotorflow.cases.moving_ported import comparison, initial_state, join, ported_models
+from rotorflow.cases.moving_ports import slab_ports
+from rotorflow.cases.moving_section import MovingSection
+from rotorflow.cases.ogrid import OGridSpec
+from rotorflow.geometry.internal_gear.family import examples
+from rotorflow.quasi1d.perfect_gas import PerfectGas
+from rotorflow.workflow.case import case_from_raw, load_toml
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[3]
+CASE = ROOT / "examples" / "default.toml"
+FIT = ROOT / "tests" / "data" / "cfd" / "chamber" / "flow_coefficient.json"
+MODELS = ("nozzle", "fanno", "cfd-calibrated")
+START_DEG = 13.0
+DEPTH = 0.01
+OMEGA = 2500.0 * 2.0 * math.pi / 60.0
+#: The start state's model: the one the closed runs found closest at each clearance
+#: (nozzle at 100 um, Fanno at 20 um); only how soon the run is periodic depends on it.
+START_MODEL = {100: "nozzle", 20: "fanno"}
+#: Two lobe periods: the second is compared, the first is how far from periodic the
+#: start was.
+TOTAL_DEG = 120.0
+#: Per clearance (um): (columns, cells across the gap, key frames per degree, steps per
+#: frame, frames between written fields, degrees per chunk).  100 um: the closed lobe
+#: period's grid and step (Courant 0.69); 20 um: its 1024 columns and 0.0625 deg frames,
+#: 160 steps a frame (144 reached Courant 0.91 closed; the ports change the flows).
+SETTINGS = {100: (512, 4, 4, 192, 2, 20.0), 20: (1024, 4, 16, 160, 8, 10.0)}
+
+
+def section(gap_um: int, start_deg: float, span_deg: float, ports, **start) -> MovingSection:
+    columns, across, per_deg, _, _, _ = SETTINGS[gap_um]
+    return MovingSection(examples()["table1"], gap_um * 1e-6,
+                         OGridSpec(columns=columns, cells_across_gap=across),
+                         math.radians(start_deg), math.radians(span_deg),
+                         int(round(span_deg * per_deg)), OMEGA, depth=DEPTH,
+                         p0=ports.p_suction, T0=ports.T_suction, ports=ports, **start)
+
+
+def _chunk_record(s: MovingSection, run, folder: Path) -> dict:
+    flows = {k: np.asarray(v) for k, v in run.port_flow.items()}
+    t = np.asarray(run.times_s)
+    dt = np.diff(np.concatenate([[0.0], t]))
+    return {"start_deg": math.degrees(s.start), "span_deg": math.degrees(s.span),
+            "status": run.status, "message": run.message, "cells": run.cells,
+            "time_steps": run.time_steps, "run_time_s": run.run_time_s,
+            "mass_balance": run.mass_balance, "max_courant": run.max_courant,
+            "max_gap_courant": run.max_gap_courant,
+            # kg through each port over the chunk (inflow positive), as the solver
+            # books it (:func:`.moving_case.mass_balance`)
+            "port_mass_kg": {k: float(np.sum(v * dt)) for k, v in flows.items()},
+            "chambers": topology_pressures(s, folder)}
+
+
+def main(runs: Path, gap_um: int, degrees: float | None = None) -> Path:
+    raw = load_toml(CASE)
+    pair, gas = examples()["table1"], PerfectGas()
+    out_dir = HERE / f"ported_{gap_um}um"
+    out_dir.mkdir(exist_ok=True)
+    book, state = out_dir / "chunks.json", out_dir / "state.npz"
+    chunks = json.loads(book.read_text()) if book.is_file() else []
+    ports, port_info = slab_ports(pair, DEPTH, gap_um * 1e-6, gas, raw, CASE, case_from_raw)
+    models = ported_models(raw, CASE, DEPTH, gap_um * 1e-6, gas, MODELS, case_from_raw, FIT)
+    steps, every, chunk = SETTINGS[gap_um][3:]
+    done = sum(c["span_deg"] for c in chunks)
+    goal = TOTAL_DEG if degrees is None else min(TOTAL_DEG, done + degrees)
+    while done < goal - 1e-9:
+        start = START_DEG + done
+        span = min(chunk, goal - done)
+        if chunks:
+            with np.load(state) as z:
+                if not math.isclose(float(z["angle_deg"]), start, abs_tol=1e-9):
+                    raise SystemExit(f"the stored state is at {float(z['angle_deg'])} deg, "
+                                     f"the next chunk starts at {start}")
+                fields = {k: z[k] for k in ("p", "T", "U")}
+            s = section(gap_um, start, span, ports, initial_fields=fields)
+        else:
+            p, T = initial_state(models[START_MODEL[gap_um]], math.radians(start))
+            s = section(gap_um, start, span, ports, initial_p=p, initial_T=T)
+        folder = runs / f"ported-{gap_um}um-{start:g}deg"
+        t0 = time.perf_counter()
+        run = run_moving_section(s, folder, RunControls(steps_per_frame=steps,
+                                                        write_every_frames=every))
+        rec = _chunk_record(s, run, folder) if run.ok else {
+            "start_deg": start, "span_deg": span, "status": run.status,
+            "message": run.message, "log_tail": run.log_tail}
+        rec["wall_clock_s"] = time.perf_counter() - t0
+        if not run.ok:
+            raise SystemExit(f"chunk at {start} deg {run.status}: {run.message}\n"
+                             f"{run.log_tail}")
+        f = end_fields(folder)
+        np.savez_compressed(state, angle_deg=start + span, **f)
+        chunks.append(rec)
+        book.write_text(json.dumps(chunks, indent=1, allow_nan=True) + "\n")
+        done += span
+        print(f"{gap_um} um: {start:g} -> {start + span:g} deg, {run.status}, "
+              f"{run.time_steps} steps, {run.run_time_s:.0f} s, balance "
+              f"{run.mass_balance:.1e}, Courant {run.max_courant:.2f}", flush=True)
+    if done < TOTAL_DEG - 1e-9:
+        return book
+    cfd = join([c["chambers"] for c in chunks])
+    rec = {"cfd": {"gap_m": gap_um * 1e-6, "depth_m": DEPTH, "start_deg": START_DEG,
+                   "span_deg": done, "start_model": START_MODEL[gap_um],
+                   "ports": port_info, "chambers": cfd,
+                   "chunks": [{k: v for k, v in c.items() if k != "chambers"}
+                              for c in chunks]},
+           **comparison(cfd, float(pair.period), models)}
+    path = HERE / f"ported_{gap_um}um.json"
+    path.write_text(json.dumps(rec, indent=1, allow_nan=True) + "\n")
+    return path
+
+
+if __name__ == "__main__":
+    print(main(Path(sys.argv[1]), int(sys.argv[2]),
+               float(sys.argv[3]) if len(sys.argv) > 3 else None))

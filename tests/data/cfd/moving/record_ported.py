@@ -15,6 +15,11 @@ state are written next to this file (``ported_<GAP>um/``: ``chunks.json``,
 far to turn in this call (default: up to TOTAL_DEG).  When the chunks span TOTAL_DEG
 the comparison with the models (:func:`.moving_ported.comparison`) is written to
 ``ported_<GAP>um.json``.
+
+    .venv/bin/python tests/data/cfd/moving/record_ported.py RUNS_DIR GAP_UM study
+
+the time step's share of the error: the first chunk again at 1.5 times its steps
+(:func:`study`).
 """
 
 from __future__ import annotations
@@ -140,6 +145,48 @@ def main(runs: Path, gap_um: int, degrees: float | None = None) -> Path:
     return path
 
 
+def study(runs: Path, gap_um: int, factor: float = 1.5) -> Path:
+    """The first chunk again at ``factor`` times the steps per frame, from the same start:
+    each chamber's largest difference from the recorded chunk over its written angles,
+    as a share of the swing over all chambers (``ported_<GAP>um_dt.json``)."""
+    raw = load_toml(CASE)
+    pair, gas = examples()["table1"], PerfectGas()
+    first = json.loads((HERE / f"ported_{gap_um}um" / "chunks.json").read_text())[0]
+    ports, _ = slab_ports(pair, DEPTH, gap_um * 1e-6, gas, raw, CASE, case_from_raw)
+    name = START_MODEL[gap_um]
+    model = ported_models(raw, CASE, DEPTH, gap_um * 1e-6, gas, (name,), case_from_raw,
+                          FIT)[name]
+    p, T = initial_state(model, math.radians(START_DEG))
+    s = section(gap_um, START_DEG, first["span_deg"], ports, initial_p=p, initial_T=T)
+    steps, every = int(round(SETTINGS[gap_um][3] * factor)), SETTINGS[gap_um][4]
+    folder = runs / f"ported-{gap_um}um-{START_DEG:g}deg-s{steps}"
+    run = run_moving_section(s, folder, RunControls(steps_per_frame=steps,
+                                                    write_every_frames=every))
+    if not run.ok:
+        raise SystemExit(f"the study's run is {run.status}: {run.message}\n{run.log_tail}")
+    fine = topology_pressures(s, folder)
+    base = first["chambers"]
+    swing = max(np.nanmax(v) for v in fine["p"].values()) - min(
+        np.nanmin(v) for v in fine["p"].values())
+    per = {}
+    for c, v in fine["p"].items():
+        a, b = np.asarray(base["p"][c], float), np.asarray(v, float)
+        ok = np.isfinite(a) & np.isfinite(b)
+        if ok.any():
+            per[c] = float(np.abs(a - b)[ok].max() / swing)
+    out = {"steps_per_frame": [SETTINGS[gap_um][3], steps], "span_deg": first["span_deg"],
+           "run_time_s": run.run_time_s, "time_steps": run.time_steps,
+           "max_courant": run.max_courant, "mass_balance": run.mass_balance,
+           "swing_Pa": float(swing), "max": max(per.values()), "chambers": per,
+           "fine": fine}
+    path = HERE / f"ported_{gap_um}um_dt.json"
+    path.write_text(json.dumps(out, indent=1, allow_nan=True) + "\n")
+    return path
+
+
 if __name__ == "__main__":
+    if sys.argv[3:4] == ["study"]:
+        print(study(Path(sys.argv[1]), int(sys.argv[2])))
+        raise SystemExit
     print(main(Path(sys.argv[1]), int(sys.argv[2]),
                float(sys.argv[3]) if len(sys.argv) > 3 else None))

@@ -115,16 +115,16 @@ def initial_state(pm: PortedModel, phi: float) -> tuple[dict, dict]:
 
 
 def periodicity(angles_deg, p: dict, period: float) -> dict:
-    """How far a run's chamber pressures are from periodic: slot s at angle phi + P
-    against slot s + 1 at phi (a chamber one lobe period on is where its neighbour was),
-    per pair of slots the largest difference over their common angles as a share of the
-    pressure swing over all slots ({"max": ..., "pairs": {"s": ...}}; empty when the run
-    spans less than a period)."""
+    """How far a run's chamber pressures are from periodic over its last two lobe
+    periods: slot s at angle phi + P against slot s + 1 at phi (a chamber one lobe
+    period on is where its neighbour was), phi in the last period but one; per pair of
+    slots the largest difference as a share of the pressure swing over all slots
+    ({"max": ..., "pairs": {"s": ...}}; empty when the run spans less than a period)."""
     a = np.radians(np.asarray(angles_deg, float))
     swing = np.nanmax([np.nanmax(v) for v in p.values()]) - np.nanmin(
         [np.nanmin(v) for v in p.values()])
     n = len(p)
-    later = a + period <= a[-1] + 1e-9
+    later = (a + period <= a[-1] + 1e-9) & (a >= a[-1] - 2.0 * period - 1e-9)
     out = {}
     for s in range(1, n + 1):
         here = np.asarray(p[str(s + 1 if s < n else 1)], float)[later]
@@ -149,14 +149,36 @@ def join(chunks: list) -> dict:
     return {"angles_deg": angles, "p": p}
 
 
+def differences(cfd: dict, model_p: np.ndarray) -> dict:
+    """Per slot, the largest and the RMS difference between the model's pressures
+    (``model_p``, (angles, N), at ``cfd["angles_deg"]``) and the CFD's, as a share of the
+    cycle's pressure swing (the CFD's largest less its least pressure over all slots and
+    angles: over a lobe period the slots together hold one chamber's whole life, while a
+    slot's own swing may be a suction chamber's few per cent); angles where either has no
+    chamber are left out (and counted).  "all": the same over every slot at once."""
+    p = np.array([np.asarray(cfd["p"][str(c)], float) for c in range(1, model_p.shape[1] + 1)]).T
+    q = np.asarray(model_p, float)
+    ok = np.isfinite(p) & np.isfinite(q)
+    swing = float(np.nanmax(p) - np.nanmin(p))
+    out = {}
+    for c in range(p.shape[1]):
+        d = (q[:, c] - p[:, c])[ok[:, c]]
+        if d.size:
+            out[str(c + 1)] = {"max": float(np.abs(d).max()) / swing,
+                               "rms": float(np.sqrt(np.mean(d * d))) / swing,
+                               "left_out": int((~ok[:, c]).sum())}
+    d = (q - p)[ok]
+    out["all"] = {"max": float(np.abs(d).max()) / swing,
+                  "rms": float(np.sqrt(np.mean(d * d))) / swing, "swing_Pa": swing}
+    return out
+
+
 def comparison(cfd: dict, period: float, models: dict) -> dict:
     """A ported run's chamber pressures (``cfd``: {"angles_deg", "p"}, from the grid's
     topology) against the models' periodic state: how far the run is from periodic
     (:func:`periodicity`), and per model its pressures at the run's angles and their
-    differences (:func:`.moving_chambers.compare`) over the run's last lobe period, the
-    one nearest periodic.  Small, and re-checkable offline."""
-    from .moving_chambers import compare
-
+    differences (:func:`differences`) over the run's last lobe period, the one nearest
+    periodic.  Small, and re-checkable offline."""
     angles = np.radians(cfd["angles_deg"])
     last = angles >= angles[-1] - period - 1e-9
     tail = {"angles_deg": list(np.asarray(cfd["angles_deg"])[last]),
@@ -165,5 +187,5 @@ def comparison(cfd: dict, period: float, models: dict) -> dict:
     for name, pm in models.items():
         p = slot_pressures(pm, angles)
         rec["models"][name] = {"p": np.where(np.isfinite(p), p, None).tolist(),
-                               "errors": compare(tail, p[last])}
+                               "errors": differences(tail, p[last])}
     return rec

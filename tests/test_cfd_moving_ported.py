@@ -10,6 +10,7 @@ hands the CFD; and the periodicity measure on traces built to be periodic or not
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -74,3 +75,75 @@ def test_periodicity_is_zero_on_a_periodic_machine_and_sees_a_drift():
     drift = {c: list(np.asarray(v) * (1.0 + 0.01 * a / a[-1])) for c, v in p.items()}
     got = periodicity(angles, drift, period)["max"]
     assert 0.003 < got < 0.05
+
+
+#: Recorded ported runs (tests/data/cfd/moving/record_ported.py): two lobe periods from
+#: the model's periodic state, in chunks, fields written every 0.5 deg.
+PORTED = {100: ROOT / "tests" / "data" / "cfd" / "moving" / "ported_100um.json"}
+
+
+def _flat(errors: dict) -> dict:
+    return {f"{c}.{k}": v for c, e in errors.items() for k, v in e.items()}
+
+
+@pytest.mark.parametrize("gap_um", list(PORTED))
+def test_the_recorded_ported_comparison_is_what_its_data_give(gap_um):
+    from rotorflow.cases.moving_ported import comparison, differences, join
+
+    rec = json.loads(PORTED[gap_um].read_text())
+    run = rec["cfd"]
+    chunks = run["chunks"]
+    assert all(c["status"] == "completed" for c in chunks)
+    # each chunk's mass against its port flows as the solver books them: the pressure
+    # equation's residual and the tables' 11 digits (6e-11 measured), far below 1e-4
+    assert max(c["mass_balance"] for c in chunks) <= 1e-8
+    assert max(c["max_courant"] for c in chunks) <= 1.0
+    assert sum(c["span_deg"] for c in chunks) == pytest.approx(run["span_deg"])
+    cfd = run["chambers"]
+    assert len(cfd["angles_deg"]) == int(round(run["span_deg"] * 2)) + 1
+    period = math.radians(60.0)
+    # the models' periodic state, rebuilt now: the record is still the product's
+    models = ported_models(load_toml(CASE), CASE, run["depth_m"], run["gap_m"], PerfectGas(),
+                           list(rec["models"]), case_from_raw,
+                           ROOT / "tests" / "data" / "cfd" / "chamber" / "flow_coefficient.json")
+    again = comparison(cfd, period, models)
+    assert again["periodicity"]["pairs"] == pytest.approx(rec["periodicity"]["pairs"],
+                                                          rel=1e-9)
+    for name, m in rec["models"].items():
+        assert _flat(again["models"][name]["errors"]) == pytest.approx(_flat(m["errors"]),
+                                                                       rel=1e-6)
+    # a perturbed CFD trace changes the figures: the check can fail
+    bad = {**cfd, "p": {k: [v * 1.01 for v in vals] for k, vals in cfd["p"].items()}}
+    m = next(iter(rec["models"].values()))
+    p = np.array(m["p"], dtype=float)
+    last = np.radians(cfd["angles_deg"]) >= np.radians(cfd["angles_deg"][-1]) - period - 1e-9
+    tail = {"angles_deg": list(np.asarray(bad["angles_deg"])[last]),
+            "p": {c: list(np.asarray(v)[last]) for c, v in bad["p"].items()}}
+    assert _flat(differences(tail, p[last])) != pytest.approx(_flat(m["errors"]), rel=1e-3)
+    assert join([cfd]) == cfd
+
+
+def test_chambers_are_told_apart_past_the_first_period():
+    # The geometry repeats every lobe period: slot s at phi + P is slot s + 1 at phi.
+    # Past one period the newborn chamber's raw slot is -1, which the column labelling
+    # once read as "unlabelled" and gave to its neighbours (the dying chamber took its
+    # cells at 113 deg).
+    from rotorflow.cases.moving_case import chamber_cells
+    from rotorflow.cases.moving_section import MovingSection
+    from rotorflow.cases.ogrid import OGridSpec, make_ogrid
+    from rotorflow.geometry.internal_gear.family import examples
+
+    pair = examples()["table1"]
+    spec = OGridSpec(columns=512, cells_across_gap=4)
+    s = MovingSection(pair, 100e-6, spec, 0.0, 1.0, 1, 100.0)
+    period = float(pair.period)
+    n = int(round(2 * math.pi / period))
+    for deg in (53.0, 29.0):
+        phi = math.radians(deg)
+        here, _ = chamber_cells(s, make_ogrid(pair, phi, s.gap, spec)[0], phi)
+        there, _ = chamber_cells(s, make_ogrid(pair, phi + period, s.gap, spec)[0],
+                                 phi + period)
+        assert {(c - 2) % n + 1 for c in here} == set(there)
+        for c, cells in here.items():
+            # the O-grid's columns jitter along the walls: a few columns of 4 cells
+            assert abs(len(there[(c - 2) % n + 1]) - len(cells)) <= 16

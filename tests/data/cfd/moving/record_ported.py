@@ -56,7 +56,7 @@ START_MODEL = {100: "nozzle", 20: "fanno"}
 #: Three lobe periods: the last is compared with the models and with the one before
 #: (periodicity); the first carries the start's transient (from the model's state, the
 #: newborn chamber's pressure differs from the next period's by 12 % of the swing at
-#: 100 um, then by ... see ported_100um.json).
+#: 100 um; the third from the second by 1.0 %).
 TOTAL_DEG = 180.0
 #: Per clearance (um): (columns, cells across the gap, key frames per degree, steps per
 #: frame, frames between written fields, degrees per chunk).  100 um: the closed lobe

@@ -52,7 +52,7 @@ from .foam_dicts import (
 )
 from .foam_files import write_dict, write_field
 from .foam_mesh import judge_check_mesh
-from .machine_zones import PORTS, chamber_zones, end_labels, seal_faces, write_zones
+from .machine_zones import NONE, PORTS, chamber_zones, end_labels, seal_faces, write_zones
 from .ogrid_quality import QualityLimits
 from .polymesh import build_polymesh, helical_stack, write_mesh
 
@@ -145,7 +145,7 @@ def write_case(m: FrozenMachine, case_dir: Path) -> tuple[Plan, Built]:
             area = 0.5 * np.linalg.norm(np.cross(q[:, 2] - q[:, 0], q[:, 3] - q[:, 1]), axis=1)
             slot = zones.cell_slot[owner[start:start + count]]
             open_area[name] = {int(s): float(area[slot == s].sum()) for s in np.unique(slot)
-                               if s >= 0}
+                               if s != NONE}
     cells = zones.cell_slot.size
     plan = Plan(
         # thin gap cells are the grid's design: the O-grid's own aspect limit holds

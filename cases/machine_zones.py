@@ -30,6 +30,7 @@ zones are written straight into ``constant/polyMesh`` (:func:`write_zones`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -40,11 +41,15 @@ from rotorflow.errors import CaseError
 from .polymesh import HEADER
 
 PORTS = ("suction", "discharge")
+#: The label of a cell or column in no chamber.  Slots run negative too (the chamber of
+#: age phi + s period, s < 0, past the first period), so "none" is no slot's number.
+NONE = np.iinfo(np.int64).min
 
 
 @dataclass(frozen=True)
 class ChamberZones:
-    """Slot of every cell (-1: none; polymesh numbering), and the slots present."""
+    """Slot of every cell (:data:`NONE`: none; polymesh numbering), and the slots
+    present."""
 
     cell_slot: np.ndarray  # (cells,)
     slots: tuple[int, ...]
@@ -66,10 +71,10 @@ def inside(polygons, xy: np.ndarray) -> np.ndarray:
 
 
 def _fill_nearest(label: np.ndarray) -> np.ndarray:
-    """Unlabelled entries (-1) of a periodic sequence take the nearest labelled one's
-    label (ties to the lower index)."""
+    """Unlabelled entries (:data:`NONE`) of a periodic sequence take the nearest labelled
+    one's label (ties to the lower index)."""
     n = label.size
-    have = np.flatnonzero(label >= 0)
+    have = np.flatnonzero(label != NONE)
     if have.size == 0:
         return label
     idx = np.arange(n)
@@ -94,9 +99,13 @@ def column_slots(pair, sections, z, phi: float, sweep) -> tuple[np.ndarray, dict
     # A planar chamber lives less than one turn of the outer rotor (N1 periods) and the
     # section at z is that of the age ``- twist(z)``: every slot whose section can be
     # alive somewhere on the rotor lies in this range (the rest return no polygon).
+    # (found at the equivalent angle of the first period, so the range does not move
+    # with phi; slot s there is slot s - shift at phi)
     turn = int(np.ceil(2.0 * np.pi / period))
     candidates = range(-turn - 1, turn + int(np.ceil(float(twist.max(initial=0.0)) / period)) + 2)
-    labels = np.full((columns, layers), -1, dtype=int)
+    shift = math.floor(phi / period)
+    base = phi - shift * period
+    labels = np.full((columns, layers), NONE, dtype=np.int64)
     ages = {}
     for k in range(layers):
         mid = 0.5 * (sections[k].points + sections[k + 1].points)  # (columns, rows+1, 2)
@@ -104,15 +113,15 @@ def column_slots(pair, sections, z, phi: float, sweep) -> tuple[np.ndarray, dict
         centre = 0.25 * (mid[:, j - 1] + mid[:, j] + np.roll(mid[:, j - 1], -1, 0)
                          + np.roll(mid[:, j], -1, 0)) if mid.shape[1] > 2 else \
             0.5 * (mid[:, 0] + np.roll(mid[:, 0], -1, 0))
-        lab = np.full(columns, -1, dtype=int)
+        lab = np.full(columns, NONE, dtype=np.int64)
         for s in candidates:
-            polys = pair.chamber_polygons(phi + s * period - twist[k])
+            polys = pair.chamber_polygons(base + s * period - twist[k])
             if not polys:
                 continue
-            hit = inside(polys, centre / scale[k]) & (lab < 0)
+            hit = inside(polys, centre / scale[k]) & (lab == NONE)
             if hit.any():
-                lab[hit] = s
-                ages[s] = phi + s * period
+                lab[hit] = s - shift
+                ages[s - shift] = phi + (s - shift) * period
         labels[:, k] = _fill_nearest(lab)
     if not ages:
         raise CaseError("no working chamber found on the grid (angle outside every "
@@ -137,7 +146,7 @@ def seal_faces(zones: ChamberZones, owner: np.ndarray, neighbour: np.ndarray) ->
     n_int = len(neighbour)
     so = zones.cell_slot[owner[:n_int]]
     sn = zones.cell_slot[neighbour]
-    cut = np.flatnonzero((so != sn) & (so >= 0) & (sn >= 0))
+    cut = np.flatnonzero((so != sn) & (so != NONE) & (sn != NONE))
     out = {}
     lo, hi = np.minimum(so[cut], sn[cut]), np.maximum(so[cut], sn[cut])
     for a, b in sorted(set(zip(lo.tolist(), hi.tolist(), strict=True))):

@@ -58,7 +58,7 @@ from .foam_dicts import (
 from .foam_files import write_dict, write_field
 from .foam_mesh import judge_check_mesh
 from .machine_case import seal_name, slot_name
-from .machine_zones import ChamberZones, chamber_zones, seal_faces, write_zones
+from .machine_zones import NONE, ChamberZones, chamber_zones, seal_faces, write_zones
 from .moving_run import SOLVER, MovingRun, end_fields, judge  # noqa: F401 (the runner's API)
 from .moving_section import GAP_COLUMN_RATIO, MovingSection, checked_frames, wall_velocity_check
 from .ogrid_quality import QualityLimits
@@ -120,29 +120,29 @@ def section_zones(s: MovingSection, grid, phi: float) -> ChamberZones:
     """The chambers of the grid at outer angle ``phi`` by the O-grid's own topology
     (:func:`.machine_zones.chamber_zones`), slot s (1..N, N the outer rotor's lobes)
     holding the chamber of machine age ``phi + s * period`` modulo a turn (a chamber
-    lives less than a turn: one slot, one chamber).  The topology is taken at the
-    equivalent angle within the first period, where every live chamber's slot is
-    non-negative: :func:`.machine_zones.column_slots` marks an unlabelled column -1, so
-    past one period the newborn chamber's slot -1 read as unlabelled and its columns went
-    to their neighbours (at 113 deg the dying chamber took the newborn's cells)."""
-    period = float(s.pair.period)
-    n = int(round(2.0 * math.pi / period))
-    k = math.floor(phi / period)
-    z = chamber_zones(s.pair, [grid, grid], np.array([0.0, s.depth]), phi - k * period,
+    lives less than a turn: one slot, one chamber; past the first period the newborn
+    chamber's own slot is negative)."""
+    n = int(round(2.0 * math.pi / float(s.pair.period)))
+    z = chamber_zones(s.pair, [grid, grid], np.array([0.0, s.depth]), phi,
                       Sweep("straight", s.depth))
 
     def fold(slot):
-        return (slot - k - 1) % n + 1
+        return (slot - 1) % n + 1
 
-    cell_slot = np.where(z.cell_slot >= 0, fold(z.cell_slot), -1)
+    cell_slot = z.cell_slot.copy()
+    on = cell_slot != NONE
+    cell_slot[on] = fold(cell_slot[on])
     return ChamberZones(cell_slot, tuple(sorted({fold(c) for c in z.slots})),
-                        {fold(c): a + k * period for c, a in z.ages.items()})
+                        {fold(c): a for c, a in z.ages.items()})
 
 
 def chamber_cells(s: MovingSection, grid, phi: float) -> tuple[dict, np.ndarray]:
     """({slot: cells} without the gap columns, the gap columns' cells) of the grid at
     outer angle ``phi``: the chambers of :func:`section_zones`."""
-    zones = section_zones(s, grid, phi)
+    return _cells(s, grid, section_zones(s, grid, phi))
+
+
+def _cells(s: MovingSection, grid, zones: ChamberZones) -> tuple[dict, np.ndarray]:
     p = grid.points
     length = np.linalg.norm(p[:, -1] - p[:, 0], axis=1)
     # a cell column spans node columns i and i + 1: a gap column if either is short
@@ -158,7 +158,7 @@ def _zones(s: MovingSection, grid, mesh) -> tuple[dict, dict, int]:
     chambers (:func:`.machine_zones.seal_faces`)."""
     pts, faces, owner, nei, patches = mesh
     zones = section_zones(s, grid, s.start)
-    cell_zones, gap_cell = chamber_cells(s, grid, s.start)
+    cell_zones, gap_cell = _cells(s, grid, zones)
     cell_zones["gaps"] = np.flatnonzero(gap_cell)
     return cell_zones, seal_faces(zones, owner, nei), int(gap_cell.sum())
 

@@ -59,7 +59,7 @@ def ported_models(raw: dict, where: Path, depth: float, gap: float, gas, models,
                   correlation: Path | None = None) -> dict:
     """{leakage model: PortedModel}: the product's periodic state of the ported slab
     (the module docstring); ``case_of`` is the workflow's case_from_raw."""
-    from rotorflow.quasi1d.simulate import build_model, case_settings, simulate
+    from rotorflow.quasi1d.simulate import case_settings, simulate
 
     from .machine_setup import case_table, table_origin
 
@@ -70,12 +70,11 @@ def ported_models(raw: dict, where: Path, depth: float, gap: float, gas, models,
         case = case_of(r, Path(where))
         if table is None:  # the leakage model does not change the geometry
             table, origin = case_table(case), table_origin(case)
-        settings = case_settings(r, str(where))
-        result = simulate(table, *settings)
+        result = simulate(table, *case_settings(r, str(where)))
         if not result.figures.get("converged", False):
             raise CaseError(f"the ported slab's quasi-1D cycle under {name!r} did not "
                             f"converge: {result.figures.get('message', '')}")
-        model = build_model(table, *settings[:4])
+        model = result.solution.model
         period = float(model.geo.period)
         out[name] = PortedModel(result, origin, period, int(round(2 * math.pi / period)),
                                 {"suction": (model.suc.p, model.suc.T),
@@ -133,7 +132,6 @@ def periodicity(angles_deg, p: dict, period: float) -> dict:
         if ok.any():
             out[str(s)] = float(np.abs(there[ok] - here[ok]).max() / swing)
     return {"max": max(out.values()) if out else math.nan, "pairs": out}
-
 
 
 def join(chunks: list) -> dict:

@@ -168,20 +168,21 @@ def slab_ports(pair, depth: float, gap: float, gas, raw: dict, where: Path, case
                tol: float = SIMPLIFY_M) -> tuple[SectionPorts, dict]:
     """(ports, what was built) of the slab (:func:`slab_machine`): the product's port
     shapes as outlines (:func:`outline`); the plenums the case's [operating] suction
-    state and discharge pressure, the discharge gas at the isentropic end state of the
-    pressure ratio (as the quasi-1D model's plenum)."""
+    state and discharge pressure, the discharge gas as the quasi-1D model's plenum holds
+    it (:func:`rotorflow.quasi1d.model.plenums`)."""
     from rotorflow.geometry.ports import ports
+    from rotorflow.quasi1d.model import plenums
     from rotorflow.quasi1d.simulate import case_settings
 
     case, machine, timing = slab_machine(pair, depth, gap, gas, raw, where, case_of)
     suction, discharge = ports(machine, timing)
     op = case_settings(case.raw, str(where))[0]
-    T_dis = op.T_suction_K * (op.p_discharge_Pa / op.p_suction_Pa) ** (1.0 - 1.0 / gas.gamma)
+    suc, dis = plenums(op.constant_cp_gas, op)  # slab_raw: the CFD's perfect gas
     rings, info = {}, {"timing_deg": {k: math.degrees(v) for k, v in vars(timing).items()}}
     for name, region in (("suction", suction), ("discharge", discharge)):
         rings[name], info[name] = outline(region, tol)
-    return SectionPorts(rings["suction"], rings["discharge"], op.p_suction_Pa,
-                        op.T_suction_K, op.p_discharge_Pa, T_dis), info
+    return SectionPorts(rings["suction"], rings["discharge"], suc.p, suc.T, dis.p,
+                        dis.T), info
 
 
 def winding(rings, xy: np.ndarray) -> np.ndarray:

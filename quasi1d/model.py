@@ -407,7 +407,9 @@ def _flux(seg: Segment, x, k1, scalar_k: bool):
 
 
 # ---------------------------------------------------------------------------------------
-def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Ports) -> ChamberModel:
+def plenums(fluid, op: Operating) -> tuple[Plenum, Plenum]:
+    """(suction, discharge) plenums of an operating point: the suction state, and the
+    discharge pressure holding what flows back from it (see below)."""
     def plenum(p, T, **given):  # given: q or h of a two-phase real-fluid state
         rho, u, h = fluid.state_pT(p, T, **given)
         k = fluid.props(np.array([rho]), np.array([u]))[2]
@@ -427,12 +429,22 @@ def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Port
         Td = fluid.T_ph(op.p_discharge_Pa, h_is)
         if op.fluid.startswith("CoolProp::"):  # (p, h): fixes a two-phase end state too
             dis_h = {"h": h_is}
-    ratio = liquid.inlet_mass_ratio(op, suc.rho) if op.gas_volume_fraction < 1.0 \
-        else op.oil_mass_ratio
+    ratio = _liquid_ratio(op, suc)
     if ratio > 0:
         Td = flooded_discharge_T(fluid, suc, op, ratio)
         dis_h = {}
-    dis = plenum(op.p_discharge_Pa, Td, **dis_h)
+    return suc, plenum(op.p_discharge_Pa, Td, **dis_h)
+
+
+def _liquid_ratio(op: Operating, suc: Plenum) -> float:
+    """Liquid (or oil) mass per gas mass drawn in."""
+    return liquid.inlet_mass_ratio(op, suc.rho) if op.gas_volume_fraction < 1.0 \
+        else op.oil_mass_ratio
+
+
+def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Ports) -> ChamberModel:
+    suc, dis = plenums(fluid, op)
+    ratio = _liquid_ratio(op, suc)
     if leak.mixture not in Leakage.MIXTURES:
         raise CaseError(f"leakage mixture {leak.mixture!r} is not one of "
                         f"{', '.join(Leakage.MIXTURES)}")

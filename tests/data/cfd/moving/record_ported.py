@@ -84,7 +84,7 @@ def _chunk_record(s: MovingSection, run, folder: Path) -> dict:
             "mass_balance": run.mass_balance, "max_courant": run.max_courant,
             "max_gap_courant": run.max_gap_courant,
             # kg through each port over the chunk (inflow positive), as the solver
-            # books it (:func:`.moving_case.mass_balance`)
+            # books it (:func:`.moving_run.mass_balance`)
             "port_mass_kg": {k: float(np.sum(v * dt)) for k, v in flows.items()},
             "chambers": topology_pressures(s, folder)}
 
@@ -92,7 +92,7 @@ def _chunk_record(s: MovingSection, run, folder: Path) -> dict:
 def retopo(runs: Path, gap_um: int) -> Path:
     """Every recorded chunk's chamber pressures taken again from its run's written
     fields (the chamber labelling once merged the newborn chamber into its neighbour
-    past one period, :func:`.moving_case.section_zones`); the run folders must still be
+    past one period, :func:`.machine_zones.column_slots`); the run folders must still be
     in ``runs``."""
     raw = load_toml(CASE)
     ports, _ = slab_ports(examples()["table1"], DEPTH, gap_um * 1e-6, PerfectGas(), raw,

@@ -169,9 +169,9 @@ def slab_ports(pair, depth: float, gap: float, gas, raw: dict, where: Path, case
     """(ports, what was built) of the slab (:func:`slab_machine`): the product's port
     shapes as outlines (:func:`outline`); the plenums the case's [operating] suction
     state and discharge pressure, the discharge gas as the quasi-1D model's plenum holds
-    it (:func:`rotorflow.quasi1d.model.plenums`)."""
+    it (:func:`rotorflow.quasi1d.plenums.plenums`)."""
     from rotorflow.geometry.ports import ports
-    from rotorflow.quasi1d.model import plenums
+    from rotorflow.quasi1d.plenums import plenums
     from rotorflow.quasi1d.simulate import case_settings
 
     case, machine, timing = slab_machine(pair, depth, gap, gas, raw, where, case_of)

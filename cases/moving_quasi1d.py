@@ -80,7 +80,7 @@ def section_models(raw: dict, where: Path, depth: float, gap: float, gas, models
 
 
 def _plenum(model, p: float, T: float):
-    from rotorflow.quasi1d.model import Plenum
+    from rotorflow.quasi1d.plenums import Plenum
 
     rho, u, h = model.fluid.state_pT(p, T)
     return Plenum(p, T, rho, u, h, float(model.fluid.gamma))

@@ -44,12 +44,12 @@ from rotorflow.errors import CaseError
 
 from . import events, flows, kernel, liquid
 from .chamber import ChamberGeometry
-from .fluids import suction_given
 from .heat import WALL_AREA_FACTOR, WallHeat, wall_heat
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_Q, ACC_W, AccColumns, Segment, segments
-from .oil import flooded_discharge_T, node_loads, oil_leak_balances, slot_balances
+from .oil import node_loads, oil_leak_balances, slot_balances
 from .oil import leakage as oil_leakage
 from .paths import resolve
+from .plenums import Plenum, liquid_ratio, plenums
 from .settings import Leakage, Operating, Ports
 
 # Drift correction of the ideal-port constraint: a pressure offset from the plenum decays
@@ -59,16 +59,6 @@ from .settings import Leakage, Operating, Ports
 IDEAL_PORT_RELAXATION_RAD = 0.2
 
 _NO_WALL = np.empty(0)  # the compiled right-hand side's "no heat transfer"
-
-
-@dataclass(frozen=True)
-class Plenum:
-    p: float
-    T: float
-    rho: float
-    u: float
-    h: float
-    kappa: float
 
 
 @dataclass(frozen=True)
@@ -406,45 +396,9 @@ def _flux(seg: Segment, x, k1, scalar_k: bool):
     return f
 
 
-# ---------------------------------------------------------------------------------------
-def plenums(fluid, op: Operating) -> tuple[Plenum, Plenum]:
-    """(suction, discharge) plenums of an operating point: the suction state, and the
-    discharge pressure holding what flows back from it (see below)."""
-    def plenum(p, T, **given):  # given: q or h of a two-phase real-fluid state
-        rho, u, h = fluid.state_pT(p, T, **given)
-        k = fluid.props(np.array([rho]), np.array([u]))[2]
-        return Plenum(p, T, rho, u, h, float(np.ravel(k)[0]) if np.ndim(k) else float(k))
-
-    wet = suction_given(op)
-    suc = plenum(op.p_suction_Pa, op.T_suction_K, **wet)
-    # Discharge plenum gas (what flows back) at the isentropic end state of the pressure
-    # ratio: the state of gas compressed from suction without losses.
-    dis_h = {}
-    if hasattr(fluid, "gamma"):
-        g = fluid.gamma
-        Td = op.T_suction_K * op.pressure_ratio ** ((g - 1.0) / g)
-    else:
-        h_is = suc.h + fluid.work_isentropic(op.p_suction_Pa, op.T_suction_K,
-                                             op.p_discharge_Pa, **wet)
-        Td = fluid.T_ph(op.p_discharge_Pa, h_is)
-        if op.fluid.startswith("CoolProp::"):  # (p, h): fixes a two-phase end state too
-            dis_h = {"h": h_is}
-    ratio = _liquid_ratio(op, suc)
-    if ratio > 0:
-        Td = flooded_discharge_T(fluid, suc, op, ratio)
-        dis_h = {}
-    return suc, plenum(op.p_discharge_Pa, Td, **dis_h)
-
-
-def _liquid_ratio(op: Operating, suc: Plenum) -> float:
-    """Liquid (or oil) mass per gas mass drawn in."""
-    return liquid.inlet_mass_ratio(op, suc.rho) if op.gas_volume_fraction < 1.0 \
-        else op.oil_mass_ratio
-
-
 def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Ports) -> ChamberModel:
     suc, dis = plenums(fluid, op)
-    ratio = _liquid_ratio(op, suc)
+    ratio = liquid_ratio(op, suc)
     if leak.mixture not in Leakage.MIXTURES:
         raise CaseError(f"leakage mixture {leak.mixture!r} is not one of "
                         f"{', '.join(Leakage.MIXTURES)}")

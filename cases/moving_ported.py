@@ -187,3 +187,32 @@ def comparison(cfd: dict, period: float, models: dict) -> dict:
         rec["models"][name] = {"p": np.where(np.isfinite(p), p, None).tolist(),
                                "errors": differences(tail, p[last])}
     return rec
+
+
+def grid_error(runs: list, ratio: float = 2.0) -> dict:
+    """The middle grid's error in the chamber pressures, from three runs from the same
+    start on grids refined by ``ratio`` (``runs``: coarse, middle, fine {"angles_deg",
+    "p"} at the same angles).  At every angle and slot: Richardson's extrapolation with
+    the observed order where the three converge monotonically, else the three's spread
+    as the error (no extrapolation is sound there); as a share of the swing over every
+    slot and angle of the fine run, per slot the largest over the angles, and how many
+    points converged how."""
+    from rotorflow.postprocess.richardson import richardson
+
+    if len(runs) != 3 or any(not np.allclose(r["angles_deg"], runs[0]["angles_deg"],
+                                             atol=1e-6) for r in runs):
+        raise ValueError("a grid study needs three runs written at the same angles")
+    fine = np.array([np.asarray(v, float) for v in runs[2]["p"].values()])
+    swing = float(np.nanmax(fine) - np.nanmin(fine))
+    per, kinds = {}, {}
+    for slot in runs[2]["p"]:
+        trio = np.array([np.asarray(r["p"][slot], float) for r in runs]).T
+        errs = []
+        for f in trio[np.isfinite(trio).all(axis=1)]:
+            r = richardson(f, ratio)
+            kinds[r.kind] = kinds.get(r.kind, 0) + 1
+            errs.append(abs(f[1] - r.extrapolated) if r.kind == "monotone"
+                        else abs(f[1] - f[2]) if r.kind == "converged" else np.ptp(f))
+        if errs:
+            per[slot] = float(max(errs) / swing)
+    return {"max": max(per.values()), "chambers": per, "kinds": kinds, "swing_Pa": swing}

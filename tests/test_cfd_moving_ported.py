@@ -164,3 +164,25 @@ def test_the_ported_runs_time_step_error_is_far_below_the_models_differences():
         assert np.abs(a - b)[ok].max() / swing == pytest.approx(got, rel=1e-9)
     # below 1 % of the swing: the models differ from the run by 2.7-4 % (RMS)
     assert study["max"] <= 0.01
+
+
+def test_the_grid_error_is_the_richardson_error_of_a_known_expansion():
+    from rotorflow.cases.moving_ported import grid_error
+
+    # p = exact + C h^2 on h, h/2, h/4: the middle grid's error is C (h/2)^2 exactly;
+    # a slot whose grids oscillate is charged the three's spread, not extrapolated
+    angles = [13.0, 13.5, 14.0]
+    exact = {"1": np.array([1.0e5, 1.1e5, 1.2e5]), "2": np.array([2.0e5, 2.5e5, 3.0e5])}
+    c = np.array([0.0, 800.0, -1600.0])
+    runs = [{"angles_deg": angles,
+             "p": {"1": list(exact["1"] + c * h**2),
+                   "2": list(exact["2"] + np.array([0.0, 300.0, 0.0]) * (-1) ** k)}}
+            for k, h in enumerate((1.0, 0.5, 0.25))]
+    out = grid_error(runs)
+    swing = 3.0e5 - 1.0e5
+    assert out["swing_Pa"] == pytest.approx(swing)
+    assert out["chambers"]["1"] == pytest.approx(1600.0 * 0.25 / swing, rel=1e-9)
+    assert out["chambers"]["2"] == pytest.approx(600.0 / swing, rel=1e-9)
+    assert out["kinds"]["monotone"] == 2 and out["kinds"]["oscillatory"] == 1
+    with pytest.raises(ValueError, match="same angles"):
+        grid_error(runs[:2])

@@ -19,7 +19,11 @@ the comparison with the models (:func:`.moving_ported.comparison`) is written to
     .venv/bin/python tests/data/cfd/moving/record_ported.py RUNS_DIR GAP_UM study
 
 the time step's share of the error: the first chunk again at 1.5 times its steps
-(:func:`study`).
+(:func:`study`);
+
+    .venv/bin/python tests/data/cfd/moving/record_ported.py RUNS_DIR GAP_UM grid
+
+the grid's: the first degrees on the grid halved and doubled (:func:`grid`).
 """
 
 from __future__ import annotations
@@ -34,7 +38,7 @@ import numpy as np
 
 from rotorflow.cases.moving_case import RunControls, end_fields, run_moving_section
 from rotorflow.cases.moving_chambers import topology_pressures
-from rotorflow.cases.moving_ported import comparison, initial_state, join, ported_models
+from rotorflow.cases.moving_ported import comparison, grid_error, initial_state, join, ported_models
 from rotorflow.cases.moving_ports import slab_ports
 from rotorflow.cases.moving_section import MovingSection
 from rotorflow.cases.ogrid import OGridSpec
@@ -63,12 +67,20 @@ TOTAL_DEG = 180.0
 #: period's grid and step (Courant 0.69); 20 um: its 1024 columns and 0.0625 deg frames,
 #: 160 steps a frame (144 reached Courant 0.91 closed; the ports change the flows).
 SETTINGS = {100: (512, 4, 4, 192, 2, 20.0), 20: (1024, 4, 16, 160, 8, 10.0)}
+#: Grid study (:func:`grid`), per clearance: degrees turned from the start, frames
+#: between written fields.  A grid 2x finer in both directions costs ~8x (cells, step),
+#: so the study turns the first part of the first chunk: 4 deg (16 frames) at 100 um,
+#: 1 deg (16 frames) at 20 um, each written 8 times.
+GRID_SPAN = {100: (4.0, 2), 20: (1.0, 2)}
 
 
-def section(gap_um: int, start_deg: float, span_deg: float, ports, **start) -> MovingSection:
+def section(gap_um: int, start_deg: float, span_deg: float, ports, refine: float = 1.0,
+            **start) -> MovingSection:
+    """The recorded run's section (``refine``: its grid's cells in both directions)."""
     columns, across, per_deg, _, _, _ = SETTINGS[gap_um]
     return MovingSection(examples()["table1"], gap_um * 1e-6,
-                         OGridSpec(columns=columns, cells_across_gap=across),
+                         OGridSpec(columns=int(round(columns * refine)),
+                                   cells_across_gap=int(round(across * refine))),
                          math.radians(start_deg), math.radians(span_deg),
                          int(round(span_deg * per_deg)), OMEGA, depth=DEPTH,
                          p0=ports.p_suction, T0=ports.T_suction, ports=ports, **start)
@@ -203,7 +215,50 @@ def study(runs: Path, gap_um: int, factor: float = 1.5) -> Path:
     return path
 
 
+def grid(runs: Path, gap_um: int) -> Path:
+    """The first GRID_SPAN degrees from the recorded run's start on its grid halved, as
+    it is, and doubled in both directions, the step with the cell (the gap's Courant
+    number held): the middle grid's error in each chamber's pressure against the
+    Richardson extrapolation (:func:`.moving_ported.grid_error`,
+    ``ported_<GAP>um_grid.json``)."""
+    raw = load_toml(CASE)
+    pair, gas = examples()["table1"], PerfectGas()
+    ports, _ = slab_ports(pair, DEPTH, gap_um * 1e-6, gas, raw, CASE, case_from_raw)
+    name = START_MODEL[gap_um]
+    model = ported_models(raw, CASE, DEPTH, gap_um * 1e-6, gas, (name,), case_from_raw,
+                          FIT)[name]
+    p, T = initial_state(model, math.radians(START_DEG))
+    span, every = GRID_SPAN[gap_um]
+    rows, pressures = [], []
+    for refine in (0.5, 1.0, 2.0):
+        s = section(gap_um, START_DEG, span, ports, refine, initial_p=p, initial_T=T)
+        steps = int(round(SETTINGS[gap_um][3] * refine))
+        folder = runs / f"ported-{gap_um}um-grid-{s.spec.columns}x{s.spec.cells_across_gap}"
+        t0 = time.perf_counter()
+        run = run_moving_section(s, folder, RunControls(steps_per_frame=steps,
+                                                        write_every_frames=every))
+        if not run.ok:
+            raise SystemExit(f"the grid study's run {folder.name} is {run.status}: "
+                             f"{run.message}\n{run.log_tail}")
+        rows.append({"columns": s.spec.columns, "cells_across": s.spec.cells_across_gap,
+                     "cells": run.cells, "steps_per_frame": steps,
+                     "time_steps": run.time_steps, "run_time_s": run.run_time_s,
+                     "wall_clock_s": time.perf_counter() - t0,
+                     "max_courant": run.max_courant, "mass_balance": run.mass_balance})
+        pressures.append(topology_pressures(s, folder))
+        print(f"{folder.name}: {run.run_time_s:.0f} s, Courant {run.max_courant:.2f}",
+              flush=True)
+    out = {"span_deg": span, "runs": rows, "pressures": pressures,
+           **grid_error(pressures)}
+    path = HERE / f"ported_{gap_um}um_grid.json"
+    path.write_text(json.dumps(out, indent=1, allow_nan=True) + "\n")
+    return path
+
+
 if __name__ == "__main__":
+    if sys.argv[3:4] == ["grid"]:
+        print(grid(Path(sys.argv[1]), int(sys.argv[2])))
+        raise SystemExit
     if sys.argv[3:4] == ["retopo"]:
         print(retopo(Path(sys.argv[1]), int(sys.argv[2])))
         raise SystemExit

@@ -186,3 +186,39 @@ def test_the_grid_error_is_the_richardson_error_of_a_known_expansion():
     assert out["kinds"]["monotone"] == 2 and out["kinds"]["oscillatory"] == 1
     with pytest.raises(ValueError, match="same angles"):
         grid_error(runs[:2])
+
+
+def test_larger_steps_err_at_first_order_and_outer_correctors_do_not_help():
+    # The first 4 deg at 100 um again at 3, 6 and 12 times the recorded step, with and
+    # without PIMPLE outer correctors (tests/data/cfd/moving/record_ported.py pimple).
+    moving = ROOT / "tests" / "data" / "cfd" / "moving"
+    study = json.loads((moving / "ported_100um_pimple.json").read_text())
+    base = json.loads((moving / "ported_100um" / "chunks.json").read_text())[0]["chambers"]
+    swing = max(np.nanmax(v) for v in base["p"].values()) - min(
+        np.nanmin(v) for v in base["p"].values())
+    assert study["swing_Pa"] == pytest.approx(swing, rel=1e-12)
+    runs = {(r["steps_per_frame"], r["outer_correctors"]): r for r in study["runs"]}
+    assert all(r["status"] == "completed" for r in runs.values())
+    for r in runs.values():  # the figures are what the stored pressures give
+        n = len(r["angles_deg"])
+        for c, got in r["chambers"].items():
+            a, b = np.array(base["p"][c][:n], float), np.array(r["p"][c], float)
+            ok = np.isfinite(a) & np.isfinite(b)
+            assert np.abs(a - b)[ok].max() / swing == pytest.approx(got, rel=1e-9)
+    # the recorded step run again from the same start is the record (a restart is exact)
+    assert runs[192, 1]["max"] <= 1e-9
+    # converged outer loops leave the implicit Euler step's own error, A k^p at k times
+    # the recorded step: the differences from the record at k = 3, 6, 12 give the
+    # observed order, (d12 - d6) / (d6 - d3) = 2^p; Euler is first order (a second-order
+    # scheme would show p = 2)
+    d3, d6, d12 = runs[64, 3]["max"], runs[32, 5]["max"], runs[16, 5]["max"]
+    assert 0.8 <= math.log2((d12 - d6) / (d6 - d3)) <= 1.5
+    # PISO's single pass (the production runs') is no further from the record than the
+    # converged outer loop at the same step, and costs 1.6-3.5 times less: outer
+    # correctors buy nothing here
+    for steps, most in ((64, 3), (32, 5), (16, 5)):
+        assert runs[steps, 1]["max"] <= runs[steps, most]["max"]
+        assert runs[steps, 1]["run_time_s"] < runs[steps, most]["run_time_s"]
+    # more outer correctors than the converged loop needs change nothing
+    assert runs[64, 2]["max"] == pytest.approx(runs[64, 3]["max"], rel=0.02)
+    assert runs[32, 3]["max"] == pytest.approx(runs[32, 5]["max"], rel=0.02)

@@ -189,6 +189,27 @@ def comparison(cfd: dict, period: float, models: dict) -> dict:
     return rec
 
 
+def largest_differences(base: dict, other: dict, swing: float) -> dict:
+    """Per slot, the largest difference between two runs' chamber pressures
+    ({"angles_deg", "p"}) at the angles both were written at, as a share of ``swing``
+    (slots and angles where either has no chamber are left out)."""
+    a_deg, b_deg = np.asarray(base["angles_deg"], float), np.asarray(other["angles_deg"], float)
+    ia = np.flatnonzero(np.isclose(a_deg[:, None], b_deg[None, :], atol=1e-6).any(axis=1))
+    ib = np.array([int(np.argmin(np.abs(b_deg - a_deg[i]))) for i in ia], dtype=int)
+    if ia.size == 0:
+        raise ValueError("the two runs have no written angle in common")
+    out = {}
+    for c, v in other["p"].items():
+        if c not in base["p"]:
+            continue
+        a = np.asarray(base["p"][c], float)[ia]
+        b = np.asarray(v, float)[ib]
+        ok = np.isfinite(a) & np.isfinite(b)
+        if ok.any():
+            out[c] = float(np.abs(a - b)[ok].max() / swing)
+    return out
+
+
 def grid_error(runs: list, ratio: float = 2.0) -> dict:
     """The middle grid's error in the chamber pressures, from three runs from the same
     start on grids refined by ``ratio`` (``runs``: coarse, middle, fine {"angles_deg",

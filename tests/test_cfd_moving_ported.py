@@ -222,3 +222,16 @@ def test_larger_steps_err_at_first_order_and_outer_correctors_do_not_help():
     # more outer correctors than the converged loop needs change nothing
     assert runs[64, 2]["max"] == pytest.approx(runs[64, 3]["max"], rel=0.02)
     assert runs[32, 3]["max"] == pytest.approx(runs[32, 5]["max"], rel=0.02)
+
+
+def test_differences_are_taken_at_the_angles_both_runs_were_written_at():
+    from rotorflow.cases.moving_ported import largest_differences
+
+    base = {"angles_deg": [13.0, 13.5, 14.0, 14.5], "p": {"1": [1.0, 2.0, 3.0, 4.0],
+                                                          "2": [5.0, np.nan, 5.0, 5.0]}}
+    # written every 0.25 deg from 13.5: only 13.5, 14.0 and 14.5 are common
+    other = {"angles_deg": [13.5, 13.75, 14.0, 14.25, 14.5],
+             "p": {"1": [2.0, 99.0, 3.5, 99.0, 4.0], "2": [7.0, 99.0, 5.0, 99.0, 5.0]}}
+    assert largest_differences(base, other, 2.0) == {"1": 0.25, "2": 0.0}
+    with pytest.raises(ValueError, match="no written angle"):
+        largest_differences(base, {"angles_deg": [20.0], "p": {"1": [1.0]}}, 1.0)

@@ -42,7 +42,14 @@ import numpy as np
 
 from rotorflow.cases.moving_case import RunControls, end_fields, run_moving_section
 from rotorflow.cases.moving_chambers import topology_pressures
-from rotorflow.cases.moving_ported import comparison, grid_error, initial_state, join, ported_models
+from rotorflow.cases.moving_ported import (
+    comparison,
+    grid_error,
+    initial_state,
+    join,
+    largest_differences,
+    ported_models,
+)
 from rotorflow.cases.moving_ports import slab_ports
 from rotorflow.cases.moving_section import MovingSection
 from rotorflow.cases.ogrid import OGridSpec
@@ -210,12 +217,7 @@ def study(runs: Path, gap_um: int, factor: float = 1.5) -> Path:
     base = first["chambers"]
     swing = max(np.nanmax(v) for v in fine["p"].values()) - min(
         np.nanmin(v) for v in fine["p"].values())
-    per = {}
-    for c, v in fine["p"].items():
-        a, b = np.asarray(base["p"][c], float), np.asarray(v, float)
-        ok = np.isfinite(a) & np.isfinite(b)
-        if ok.any():
-            per[c] = float(np.abs(a - b)[ok].max() / swing)
+    per = largest_differences(base, fine, swing)
     out = {"steps_per_frame": [SETTINGS[gap_um][3], steps], "span_deg": first["span_deg"],
            "run_time_s": run.run_time_s, "time_steps": run.time_steps,
            "max_courant": run.max_courant, "mass_balance": run.mass_balance,
@@ -300,15 +302,10 @@ def pimple(runs: Path, gap_um: int) -> Path:
                "max_courant": run.max_courant, "mass_balance": run.mass_balance}
         if run.ok:
             got = topology_pressures(s, folder)
-            n = len(got["angles_deg"])
-            if not np.allclose(got["angles_deg"], base["angles_deg"][:n], atol=1e-6):
+            if not np.allclose(got["angles_deg"],
+                               base["angles_deg"][:len(got["angles_deg"])], atol=1e-6):
                 raise SystemExit(f"{folder.name} is written at other angles than the record")
-            per = {}
-            for c, v in got["p"].items():
-                a, b = np.asarray(base["p"][c][:n], float), np.asarray(v, float)
-                ok = np.isfinite(a) & np.isfinite(b)
-                if ok.any():
-                    per[c] = float(np.abs(a - b)[ok].max() / swing)
+            per = largest_differences(base, got, swing)
             row.update(chambers=per, max=max(per.values()), p=got["p"],
                        angles_deg=got["angles_deg"])
         rows.append(row)

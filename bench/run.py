@@ -18,6 +18,7 @@ MODULES = (
     "bench.bench_cfd",
     "bench.bench_cfd3d",
     "bench.bench_cfd_moving",
+    "bench.bench_cfd_moving_ported",
     "bench.bench_workflow",
     "bench.bench_process",
     "bench.bench_optimise",

@@ -78,6 +78,9 @@ TOTAL_DEG = 180.0
 #: period's grid and step (Courant 0.69); 20 um: its 1024 columns and 0.0625 deg frames,
 #: 160 steps a frame (144 reached Courant 0.91 closed; the ports change the flows).
 SETTINGS = {100: (512, 4, 4, 192, 2, 20.0), 20: (1024, 4, 16, 160, 8, 10.0)}
+#: The chunks the step studies (:func:`study`, :func:`pimple`) start from and compare
+#: with, per clearance.
+STEP_REFERENCE = {100: "ported_100um", 20: "ported_20um"}
 #: Grid study (:func:`grid`), per clearance: degrees turned from the start, frames
 #: between written fields.  A grid 2x finer in both directions costs ~8x (cells, step),
 #: so the study turns the first part of the first chunk: 4 deg (16 frames) at 100 um,
@@ -194,18 +197,29 @@ def main(runs: Path, gap_um: int, degrees: float | None = None) -> Path:
     return path
 
 
-def study(runs: Path, gap_um: int, factor: float = 1.5) -> Path:
-    """The first chunk again at ``factor`` times the steps per frame, from the same start:
-    each chamber's largest difference from the recorded chunk over its written angles,
-    as a share of the swing over all chambers (``ported_<GAP>um_dt.json``)."""
+def _start(gap_um: int):
+    """(ports, {slot: p}, {slot: T}): the slab's ports and the first chunk's start, the
+    START_MODEL's periodic state at START_DEG."""
     raw = load_toml(CASE)
     pair, gas = examples()["table1"], PerfectGas()
-    first = json.loads((HERE / f"ported_{gap_um}um" / "chunks.json").read_text())[0]
     ports, _ = slab_ports(pair, DEPTH, gap_um * 1e-6, gas, raw, CASE, case_from_raw)
     name = START_MODEL[gap_um]
     model = ported_models(raw, CASE, DEPTH, gap_um * 1e-6, gas, (name,), case_from_raw,
                           FIT)[name]
-    p, T = initial_state(model, math.radians(START_DEG))
+    return (ports, *initial_state(model, math.radians(START_DEG)))
+
+
+def _reference_chunks(gap_um: int) -> list:
+    """The chunks recorded at the step the studies start from (STEP_REFERENCE)."""
+    return json.loads((HERE / STEP_REFERENCE[gap_um] / "chunks.json").read_text())
+
+
+def study(runs: Path, gap_um: int, factor: float = 1.5) -> Path:
+    """The first chunk again at ``factor`` times the steps per frame, from the same start:
+    each chamber's largest difference from the recorded chunk over its written angles,
+    as a share of the swing over all chambers (``ported_<GAP>um_dt.json``)."""
+    first = _reference_chunks(gap_um)[0]
+    ports, p, T = _start(gap_um)
     s = section(gap_um, START_DEG, first["span_deg"], ports, initial_p=p, initial_T=T)
     steps, every = int(round(SETTINGS[gap_um][3] * factor)), SETTINGS[gap_um][4]
     folder = runs / f"ported-{gap_um}um-{START_DEG:g}deg-s{steps}"
@@ -234,13 +248,7 @@ def grid(runs: Path, gap_um: int) -> Path:
     number held): the middle grid's error in each chamber's pressure against the
     Richardson extrapolation (:func:`.moving_ported.grid_error`,
     ``ported_<GAP>um_grid.json``)."""
-    raw = load_toml(CASE)
-    pair, gas = examples()["table1"], PerfectGas()
-    ports, _ = slab_ports(pair, DEPTH, gap_um * 1e-6, gas, raw, CASE, case_from_raw)
-    name = START_MODEL[gap_um]
-    model = ported_models(raw, CASE, DEPTH, gap_um * 1e-6, gas, (name,), case_from_raw,
-                          FIT)[name]
-    p, T = initial_state(model, math.radians(START_DEG))
+    ports, p, T = _start(gap_um)
     span, every = GRID_SPAN[gap_um]
     rows, pressures = [], []
     for refine in (0.5, 1.0, 2.0):
@@ -274,14 +282,8 @@ def pimple(runs: Path, gap_um: int) -> Path:
     difference from the recorded run at its written angles as a share of the recorded
     first chunk's swing (``ported_<GAP>um_pimple.json``).  A variant that fails is a
     result, kept with its message."""
-    raw = load_toml(CASE)
-    pair, gas = examples()["table1"], PerfectGas()
-    first = json.loads((HERE / f"ported_{gap_um}um" / "chunks.json").read_text())[0]
-    ports, _ = slab_ports(pair, DEPTH, gap_um * 1e-6, gas, raw, CASE, case_from_raw)
-    name = START_MODEL[gap_um]
-    model = ported_models(raw, CASE, DEPTH, gap_um * 1e-6, gas, (name,), case_from_raw,
-                          FIT)[name]
-    p, T = initial_state(model, math.radians(START_DEG))
+    first = _reference_chunks(gap_um)[0]
+    ports, p, T = _start(gap_um)
     span, variants = PIMPLE[gap_um]
     every = SETTINGS[gap_um][4]
     base = first["chambers"]

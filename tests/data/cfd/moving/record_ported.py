@@ -76,10 +76,16 @@ TOTAL_DEG = 180.0
 #: Per clearance (um): (columns, cells across the gap, key frames per degree, steps per
 #: frame, frames between written fields, degrees per chunk).  100 um: the closed lobe
 #: period's grid and step (Courant 0.69); 20 um: its 1024 columns and 0.0625 deg frames,
-#: 160 steps a frame (144 reached Courant 0.91 closed; the ports change the flows).
-SETTINGS = {100: (512, 4, 4, 192, 2, 20.0), 20: (1024, 4, 16, 160, 8, 10.0)}
+#: 40 steps a frame.  The 20 um run's first five chunks (13-63 deg) went at 160 (Courant
+#: 0.24-0.61); the cost-control study (:func:`pimple`) found 40 within 0.18 % of the
+#: swing of them over the first chunk at a fifth of the solver's time, so the rest goes
+#: at 40 (each chunk's record says its steps).
+SETTINGS = {100: (512, 4, 4, 192, 2, 20.0), 20: (1024, 4, 16, 40, 8, 10.0)}
+#: Largest Courant number a chunk may reach (RunControls.max_courant): PISO above 1 is
+#: judged by the step study, which at 100 um found it stable to 7 and first order.
+MAX_COURANT = {100: 1.0, 20: 4.0}
 #: The chunks the step studies (:func:`study`, :func:`pimple`) start from and compare
-#: with, per clearance.
+#: with, per clearance: the first chunk at its own steps.
 STEP_REFERENCE = {100: "ported_100um", 20: "ported_20um"}
 #: Grid study (:func:`grid`), per clearance: degrees turned from the start, frames
 #: between written fields.  A grid 2x finer in both directions costs ~8x (cells, step),
@@ -92,7 +98,7 @@ GRID_SPAN = {100: (4.0, 2), 20: (1.0, 2)}
 #: 20 um: its whole first chunk, PISO only (at 100 um outer correctors only cost).
 PIMPLE = {100: (4.0, ((None, 1), (64, 1), (64, 2), (64, 3), (32, 1), (32, 3), (32, 5),
                       (16, 1), (16, 5))),
-          20: (10.0, ((40, 1), (20, 1), (80, 1)))}
+          20: (10.0, ((40, 1), (20, 1)))}
 
 
 def section(gap_um: int, start_deg: float, span_deg: float, ports, refine: float = 1.0,
@@ -166,12 +172,14 @@ def main(runs: Path, gap_um: int, degrees: float | None = None) -> Path:
             s = section(gap_um, start, span, ports, initial_p=p, initial_T=T)
         folder = runs / f"ported-{gap_um}um-{start:g}deg"
         t0 = time.perf_counter()
-        run = run_moving_section(s, folder, RunControls(steps_per_frame=steps,
-                                                        write_every_frames=every))
+        run = run_moving_section(s, folder, RunControls(
+            steps_per_frame=steps, write_every_frames=every,
+            max_courant=MAX_COURANT[gap_um]))
         rec = _chunk_record(s, run, folder) if run.ok else {
             "start_deg": start, "span_deg": span, "status": run.status,
             "message": run.message, "log_tail": run.log_tail}
         rec["wall_clock_s"] = time.perf_counter() - t0
+        rec["steps_per_frame"] = steps
         if not run.ok:
             raise SystemExit(f"chunk at {start} deg {run.status}: {run.message}\n"
                              f"{run.log_tail}")
@@ -214,6 +222,12 @@ def _reference_chunks(gap_um: int) -> list:
     return json.loads((HERE / STEP_REFERENCE[gap_um] / "chunks.json").read_text())
 
 
+def _steps_of(chunk: dict, gap_um: int) -> int:
+    """A recorded chunk's time steps per key frame."""
+    frames = chunk["span_deg"] * SETTINGS[gap_um][2]
+    return int(round(chunk["time_steps"] / frames))
+
+
 def study(runs: Path, gap_um: int, factor: float = 1.5) -> Path:
     """The first chunk again at ``factor`` times the steps per frame, from the same start:
     each chamber's largest difference from the recorded chunk over its written angles,
@@ -221,7 +235,8 @@ def study(runs: Path, gap_um: int, factor: float = 1.5) -> Path:
     first = _reference_chunks(gap_um)[0]
     ports, p, T = _start(gap_um)
     s = section(gap_um, START_DEG, first["span_deg"], ports, initial_p=p, initial_T=T)
-    steps, every = int(round(SETTINGS[gap_um][3] * factor)), SETTINGS[gap_um][4]
+    ref = _steps_of(first, gap_um)
+    steps, every = int(round(ref * factor)), SETTINGS[gap_um][4]
     folder = runs / f"ported-{gap_um}um-{START_DEG:g}deg-s{steps}"
     run = run_moving_section(s, folder, RunControls(steps_per_frame=steps,
                                                     write_every_frames=every))
@@ -232,7 +247,7 @@ def study(runs: Path, gap_um: int, factor: float = 1.5) -> Path:
     swing = max(np.nanmax(v) for v in fine["p"].values()) - min(
         np.nanmin(v) for v in fine["p"].values())
     per = largest_differences(base, fine, swing)
-    out = {"steps_per_frame": [SETTINGS[gap_um][3], steps], "span_deg": first["span_deg"],
+    out = {"steps_per_frame": [ref, steps], "span_deg": first["span_deg"],
            "run_time_s": run.run_time_s, "time_steps": run.time_steps,
            "max_courant": run.max_courant, "mass_balance": run.mass_balance,
            "swing_Pa": float(swing), "max": max(per.values()), "chambers": per,
@@ -291,17 +306,16 @@ def pimple(runs: Path, gap_um: int) -> Path:
         np.nanmin(v) for v in base["p"].values())
     rows = []
     for steps, outer in variants:
-        steps = steps or SETTINGS[gap_um][3]
+        steps = steps or _steps_of(first, gap_um)
         s = section(gap_um, START_DEG, span, ports, initial_p=p, initial_T=T)
         folder = runs / f"ported-{gap_um}um-pimple-s{steps}-o{outer}"
-        t0 = time.perf_counter()
         run = run_moving_section(s, folder, RunControls(
             steps_per_frame=steps, write_every_frames=every, outer_correctors=outer,
             max_courant=math.inf))
         row = {"steps_per_frame": steps, "outer_correctors": outer, "status": run.status,
                "message": run.message, "time_steps": run.time_steps,
-               "run_time_s": run.run_time_s, "wall_clock_s": time.perf_counter() - t0,
-               "max_courant": run.max_courant, "mass_balance": run.mass_balance}
+               "run_time_s": run.run_time_s, "max_courant": run.max_courant,
+               "mass_balance": run.mass_balance}
         if run.ok:
             got = topology_pressures(s, folder)
             if not np.allclose(got["angles_deg"],

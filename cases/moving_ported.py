@@ -210,14 +210,14 @@ def largest_differences(base: dict, other: dict, swing: float) -> dict:
     return out
 
 
-def grid_error(runs: list, ratio: float = 2.0) -> dict:
-    """The middle grid's error in the chamber pressures, from three runs from the same
-    start on grids refined by ``ratio`` (``runs``: coarse, middle, fine {"angles_deg",
-    "p"} at the same angles).  At every angle and slot: Richardson's extrapolation with
-    the observed order where the three converge monotonically, else the three's spread
-    as the error (no extrapolation is sound there); as a share of the swing over every
-    slot and angle of the fine run, per slot the largest over the angles, and how many
-    points converged how."""
+def grid_error(runs: list, ratio: float = 2.0, of: int = 1) -> dict:
+    """Run ``of``'s error in the chamber pressures (0: the coarsest), from three runs from
+    the same start on grids refined by ``ratio`` (``runs``: coarse, middle, fine
+    {"angles_deg", "p"} at the same angles).  At every angle and slot: Richardson's
+    extrapolation with the observed order where the three converge monotonically, else
+    the three's spread as the error (no extrapolation is sound there); as a share of the
+    swing over every slot and angle of the fine run, per slot the largest over the
+    angles, and how many points converged how."""
     from rotorflow.postprocess.richardson import richardson
 
     if len(runs) != 3 or any(not np.allclose(r["angles_deg"], runs[0]["angles_deg"],
@@ -232,8 +232,8 @@ def grid_error(runs: list, ratio: float = 2.0) -> dict:
         for f in trio[np.isfinite(trio).all(axis=1)]:
             r = richardson(f, ratio)
             kinds[r.kind] = kinds.get(r.kind, 0) + 1
-            errs.append(abs(f[1] - r.extrapolated) if r.kind == "monotone"
-                        else abs(f[1] - f[2]) if r.kind == "converged" else np.ptp(f))
+            errs.append(abs(f[of] - r.extrapolated) if r.kind in ("monotone", "converged")
+                        else np.ptp(f))
         if errs:
             per[slot] = float(max(errs) / swing)
     return {"max": max(per.values()), "chambers": per, "kinds": kinds, "swing_Pa": swing}

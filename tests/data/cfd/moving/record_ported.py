@@ -88,10 +88,13 @@ MAX_COURANT = {100: 1.0, 20: 4.0}
 #: with, per clearance: the first chunk at its own steps.
 STEP_REFERENCE = {100: "ported_100um", 20: "ported_20um"}
 #: Grid study (:func:`grid`), per clearance: degrees turned from the start, frames
-#: between written fields.  A grid 2x finer in both directions costs ~8x (cells, step),
-#: so the study turns the first part of the first chunk: 4 deg (16 frames) at 100 um,
-#: 1 deg (16 frames) at 20 um, each written 8 times.
-GRID_SPAN = {100: (4.0, 2), 20: (1.0, 2)}
+#: between written fields, and the grids' refinement of the run's cells in both
+#: directions (a constant ratio).  A grid 2x finer costs ~8x (cells, step), so the study
+#: turns the first part of the first chunk: 4 deg (16 frames) at 100 um, the run's grid
+#: halved and doubled; 1 deg (16 frames) at 20 um, where the halved grid (512 x 2) fails
+#: the O-grid's skewness limit at 13 deg (5.8 against 4), so the run's grid is the
+#: coarsest of three refined by 1.5 (1024 x 4, 1536 x 6, 2304 x 9).
+GRID_SPAN = {100: (4.0, 2, (0.5, 1.0, 2.0)), 20: (1.0, 2, (1.0, 1.5, 2.25))}
 #: Cost control (:func:`pimple`), per clearance: degrees from the start, and (steps per
 #: frame, PIMPLE outer correctors) of each variant, against the recorded run (PISO at
 #: Courant below 1; None: its own steps, run again).  100 um: the grid study's degrees;
@@ -258,21 +261,22 @@ def study(runs: Path, gap_um: int, factor: float = 1.5) -> Path:
 
 
 def grid(runs: Path, gap_um: int) -> Path:
-    """The first GRID_SPAN degrees from the recorded run's start on its grid halved, as
-    it is, and doubled in both directions, the step with the cell (the gap's Courant
-    number held): the middle grid's error in each chamber's pressure against the
+    """The first GRID_SPAN degrees from the recorded run's start on three grids refined
+    by a constant ratio in both directions, the step with the cell (the gap's Courant
+    number held): the run's grid's error in each chamber's pressure against the
     Richardson extrapolation (:func:`.moving_ported.grid_error`,
     ``ported_<GAP>um_grid.json``)."""
     ports, p, T = _start(gap_um)
-    span, every = GRID_SPAN[gap_um]
+    span, every, refines = GRID_SPAN[gap_um]
     rows, pressures = [], []
-    for refine in (0.5, 1.0, 2.0):
+    for refine in refines:
         s = section(gap_um, START_DEG, span, ports, refine, initial_p=p, initial_T=T)
         steps = int(round(SETTINGS[gap_um][3] * refine))
         folder = runs / f"ported-{gap_um}um-grid-{s.spec.columns}x{s.spec.cells_across_gap}"
         t0 = time.perf_counter()
-        run = run_moving_section(s, folder, RunControls(steps_per_frame=steps,
-                                                        write_every_frames=every))
+        run = run_moving_section(s, folder, RunControls(
+            steps_per_frame=steps, write_every_frames=every,
+            max_courant=MAX_COURANT[gap_um]))
         if not run.ok:
             raise SystemExit(f"the grid study's run {folder.name} is {run.status}: "
                              f"{run.message}\n{run.log_tail}")
@@ -284,8 +288,9 @@ def grid(runs: Path, gap_um: int) -> Path:
         pressures.append(topology_pressures(s, folder))
         print(f"{folder.name}: {run.run_time_s:.0f} s, Courant {run.max_courant:.2f}",
               flush=True)
-    out = {"span_deg": span, "runs": rows, "pressures": pressures,
-           **grid_error(pressures)}
+    ratio, of = refines[1] / refines[0], refines.index(1.0)
+    out = {"span_deg": span, "ratio": ratio, "run_grid": of, "runs": rows,
+           "pressures": pressures, **grid_error(pressures, ratio, of)}
     path = HERE / f"ported_{gap_um}um_grid.json"
     path.write_text(json.dumps(out, indent=1, allow_nan=True) + "\n")
     return path

@@ -273,7 +273,6 @@ def grid(runs: Path, gap_um: int) -> Path:
         s = section(gap_um, START_DEG, span, ports, refine, initial_p=p, initial_T=T)
         steps = int(round(SETTINGS[gap_um][3] * refine))
         folder = runs / f"ported-{gap_um}um-grid-{s.spec.columns}x{s.spec.cells_across_gap}"
-        t0 = time.perf_counter()
         run = run_moving_section(s, folder, RunControls(
             steps_per_frame=steps, write_every_frames=every,
             max_courant=MAX_COURANT[gap_um]))
@@ -283,7 +282,6 @@ def grid(runs: Path, gap_um: int) -> Path:
         rows.append({"columns": s.spec.columns, "cells_across": s.spec.cells_across_gap,
                      "cells": run.cells, "steps_per_frame": steps,
                      "time_steps": run.time_steps, "run_time_s": run.run_time_s,
-                     "wall_clock_s": time.perf_counter() - t0,
                      "max_courant": run.max_courant, "mass_balance": run.mass_balance})
         pressures.append(topology_pressures(s, folder))
         print(f"{folder.name}: {run.run_time_s:.0f} s, Courant {run.max_courant:.2f}",

@@ -338,17 +338,8 @@ def pimple(runs: Path, gap_um: int) -> Path:
 
 
 if __name__ == "__main__":
-    if sys.argv[3:4] == ["pimple"]:
-        print(pimple(Path(sys.argv[1]), int(sys.argv[2])))
-        raise SystemExit
-    if sys.argv[3:4] == ["grid"]:
-        print(grid(Path(sys.argv[1]), int(sys.argv[2])))
-        raise SystemExit
-    if sys.argv[3:4] == ["retopo"]:
-        print(retopo(Path(sys.argv[1]), int(sys.argv[2])))
-        raise SystemExit
-    if sys.argv[3:4] == ["study"]:
-        print(study(Path(sys.argv[1]), int(sys.argv[2])))
-        raise SystemExit
-    print(main(Path(sys.argv[1]), int(sys.argv[2]),
-               float(sys.argv[3]) if len(sys.argv) > 3 else None))
+    runs_dir, gap, what = Path(sys.argv[1]), int(sys.argv[2]), sys.argv[3:4]
+    mode = {"study": study, "grid": grid, "pimple": pimple, "retopo": retopo}.get(
+        what[0] if what else "")
+    print(mode(runs_dir, gap) if mode else main(runs_dir, gap,
+                                                float(what[0]) if what else None))

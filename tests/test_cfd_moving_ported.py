@@ -79,7 +79,7 @@ def test_periodicity_is_zero_on_a_periodic_machine_and_sees_a_drift():
 
 #: Recorded ported runs (tests/data/cfd/moving/record_ported.py): two lobe periods from
 #: the model's periodic state, in chunks, fields written every 0.5 deg.
-PORTED = {100: ROOT / "tests" / "data" / "cfd" / "moving" / "ported_100um.json"}
+PORTED = {g: ROOT / "tests" / "data" / "cfd" / "moving" / f"ported_{g}um.json" for g in (100, 20)}
 
 
 def _courant_limit(gap_um: int, chunk: dict) -> float:

@@ -7,8 +7,8 @@ STEPS steps per 0.25 deg key frame (the recorded run's 192 and 2, 4 and 8 times 
 Courant numbers ~0.6 to ~7).  What is compared: every chamber's pressure at the end,
 from the grid's own topology; the reference is the Richardson extrapolation of the three
 finest (observed order), and a run's error is its largest chamber difference from it as
-a share of the cycle's pressure swing (the finest run's largest less its least chamber
-pressure over the span).  Cost per revolution: the solver's time over the span scaled to
+a share of the pressure swing (the finest run's largest less its least chamber
+pressure at the end).  Cost per revolution: the solver's time over the span scaled to
 360 deg, on one core.  Needs OpenFOAM; without it nothing is measured.  ~5 min.
 
 The grid's share of the ported run's error is the recorded study

@@ -77,7 +77,7 @@ def test_periodicity_is_zero_on_a_periodic_machine_and_sees_a_drift():
     assert 0.003 < got < 0.05
 
 
-#: Recorded ported runs (tests/data/cfd/moving/record_ported.py): two lobe periods from
+#: Recorded ported runs (tests/data/cfd/moving/record_ported.py): three lobe periods from
 #: the model's periodic state, in chunks, fields written every 0.5 deg.
 PORTED = {g: ROOT / "tests" / "data" / "cfd" / "moving" / f"ported_{g}um.json" for g in (100, 20)}
 
@@ -170,7 +170,14 @@ def test_the_ported_runs_time_step_error_is_far_below_the_models_differences(gap
     study = json.loads((moving / f"ported_{gap_um}um_dt.json").read_text())
     base = json.loads((moving / f"ported_{gap_um}um" / "chunks.json").read_text())[0]
     assert study["steps_per_frame"][1] == pytest.approx(1.5 * study["steps_per_frame"][0])
-    base = base["chambers"]
+    base, fine = base["chambers"], study["fine"]
+    assert np.allclose(fine["angles_deg"], base["angles_deg"], atol=1e-6)
+    swing = max(np.nanmax(v) for v in fine["p"].values()) - min(
+        np.nanmin(v) for v in fine["p"].values())
+    for c, got in study["chambers"].items():
+        a, b = np.array(base["p"][c], float), np.array(fine["p"][c], float)
+        ok = np.isfinite(a) & np.isfinite(b)
+        assert np.abs(a - b)[ok].max() / swing == pytest.approx(got, rel=1e-9)
     # below 1 % of the swing: the models differ from the run by 2.7-4 % (RMS) at 100 um
     assert study["max"] <= 0.01
 
@@ -271,19 +278,20 @@ def test_differences_are_taken_at_the_angles_both_runs_were_written_at():
         largest_differences(base, {"angles_deg": [20.0], "p": {"1": [1.0]}}, 1.0)
 
 
-#: Recorded grid studies (record_ported.py grid): the first degrees on the run's grid
-#: halved, as it is and doubled.
+#: Recorded grid studies (record_ported.py grid): the first degrees on three grids
+#: refined by a constant ratio, the run's among them.
 GRIDS = {g: ROOT / "tests" / "data" / "cfd" / "moving" / f"ported_{g}um_grid.json"
          for g in (100, 20)}
 
 
-@pytest.mark.parametrize("gap_um", [g for g, f in GRIDS.items() if f.is_file()])
+@pytest.mark.parametrize("gap_um", list(GRIDS))
 def test_the_ported_runs_grid_error_is_what_its_three_grids_give(gap_um):
     from rotorflow.cases.moving_ported import grid_error
 
     rec = json.loads(GRIDS[gap_um].read_text())
     runs, ratio, of = rec["runs"], rec["ratio"], rec["run_grid"]
-    for coarse, fine in zip(runs, runs[1:]):  # a constant ratio, the step with the cell
+    # a constant ratio, the step with the cell
+    for coarse, fine in zip(runs, runs[1:], strict=False):
         for key in ("columns", "cells_across", "steps_per_frame"):
             assert fine[key] == pytest.approx(ratio * coarse[key], rel=0.01)
     assert max(r["mass_balance"] for r in runs) <= 1e-8

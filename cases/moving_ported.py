@@ -153,16 +153,20 @@ def differences(cfd: dict, model_p: np.ndarray) -> dict:
     cycle's pressure swing (the CFD's largest less its least pressure over all slots and
     angles: over a lobe period the slots together hold one chamber's whole life, while a
     slot's own swing may be a suction chamber's few per cent); angles where either has no
-    chamber are left out (and counted).  "all": the same over every slot at once."""
+    chamber are left out (and counted); "max_at_deg": the machine angle of the largest.
+    "all": the same over every slot at once."""
     p = np.array([np.asarray(cfd["p"][str(c)], float) for c in range(1, model_p.shape[1] + 1)]).T
     q = np.asarray(model_p, float)
+    angles = np.asarray(cfd["angles_deg"], float)
     ok = np.isfinite(p) & np.isfinite(q)
     swing = float(np.nanmax(p) - np.nanmin(p))
     out = {}
     for c in range(p.shape[1]):
         d = (q[:, c] - p[:, c])[ok[:, c]]
         if d.size:
-            out[str(c + 1)] = {"max": float(np.abs(d).max()) / swing,
+            worst = int(np.argmax(np.abs(d)))
+            out[str(c + 1)] = {"max": float(np.abs(d[worst])) / swing,
+                               "max_at_deg": float(angles[ok[:, c]][worst]),
                                "rms": float(np.sqrt(np.mean(d * d))) / swing,
                                "left_out": int((~ok[:, c]).sum())}
     d = (q - p)[ok]

@@ -349,10 +349,10 @@ def _centroid(rings) -> np.ndarray:
     return moment / (3.0 * sum(c.sum() for c in cross))
 
 
-def port_overlap(s, grid, phi: float, machine) -> dict:
+def port_overlap(s, grid, phi: float, machine, port: str = "suction") -> dict:
     """The frame check on the O-grid ``grid`` of outer angle ``phi``: per slot, the
-    product's chamber section at ``phi + slot P`` inside the suction outline against
-    the back faces inside the outline whose cells are the slot's
+    product's chamber section at ``phi + slot P`` inside the ``port``'s outline against
+    the end faces (back: suction, front: discharge) inside the outline whose cells are the slot's
     (:func:`.moving_case.chamber_cells`, gap columns left out): {slot: {"exact",
     "cfd": areas, m2; "band": the area of the slot's faces which the boundary of
     section and outline cuts (not all four corners on one side), about the most the two
@@ -369,12 +369,14 @@ def port_overlap(s, grid, phi: float, machine) -> dict:
 
     mesh = build_polymesh([grid, grid], np.array([0.0, s.depth]), end_patches)
     pts, faces, owner, _, patches = mesh
-    _, _, start, count = next(p for p in patches if p[0] == PATCHES[0])
-    centre, area = face_centres(pts, mesh, PATCHES[0])
+    patch = PATCHES[0] if port == "suction" else PATCHES[1]
+    rings = getattr(s.ports, port)
+    _, _, start, count = next(p for p in patches if p[0] == patch)
+    centre, area = face_centres(pts, mesh, patch)
     corners = pts[faces[start:start + count]][..., :2]
     owner = owner[start:start + count]
-    hit = inside(s.ports.suction, centre)
-    port = CrossSection([np.ascontiguousarray(q) for q in map(np.asarray, s.ports.suction)],
+    hit = inside(rings, centre)
+    port = CrossSection([np.ascontiguousarray(q) for q in map(np.asarray, rings)],
                         FillRule.NonZero)
     out = {}
     for slot, c in chamber_cells(s, grid, phi)[0].items():

@@ -25,6 +25,10 @@ the time step's share of the error: the first chunk again at 1.5 times its steps
 
 the grid's: the first degrees on the grid halved and doubled (:func:`grid`);
 
+    .venv/bin/python tests/data/cfd/moving/record_ported.py RUNS_DIR GAP_UM opening
+
+the same over a discharge port's opening (GRID_OPENING);
+
     .venv/bin/python tests/data/cfd/moving/record_ported.py RUNS_DIR GAP_UM pimple
 
 fewer, larger steps with PIMPLE outer correctors against the record (:func:`pimple`).
@@ -95,6 +99,11 @@ STEP_REFERENCE = {100: "ported_100um", 20: "ported_20um"}
 #: the O-grid's skewness limit at 13 deg (5.8 against 4), so the run's grid is the
 #: coarsest of three refined by 1.5 (1024 x 4, 1536 x 6, 2304 x 9).
 GRID_SPAN = {100: (4.0, 2, (0.5, 1.0, 2.0)), 20: (1.0, 2, (1.0, 1.5, 2.25))}
+#: The grid study again over a discharge port's opening (mode ``opening``): slot 2's
+#: port opens at ~170 deg, where the run differs most from every model (its pressure
+#: rises 1.5 deg on and rings), so the three grids turn 166-174 deg, each from the
+#: START_MODEL's periodic state at 166 deg (``ported_<GAP>um_grid_opening.json``).
+GRID_OPENING = (166.0, 8.0)
 #: Cost control (:func:`pimple`), per clearance: degrees from the start, and (steps per
 #: frame, PIMPLE outer correctors) of each variant, against the recorded run (PISO at
 #: Courant below 1; None: its own steps, run again).  100 um: the grid study's degrees;
@@ -208,16 +217,16 @@ def main(runs: Path, gap_um: int, degrees: float | None = None) -> Path:
     return path
 
 
-def _start(gap_um: int):
-    """(ports, {slot: p}, {slot: T}): the slab's ports and the first chunk's start, the
-    START_MODEL's periodic state at START_DEG."""
+def _start(gap_um: int, start_deg: float = START_DEG):
+    """(ports, {slot: p}, {slot: T}): the slab's ports and a run's start, the
+    START_MODEL's periodic state at ``start_deg`` (the first chunk's: START_DEG)."""
     raw = load_toml(CASE)
     pair, gas = examples()["table1"], PerfectGas()
     ports, _ = slab_ports(pair, DEPTH, gap_um * 1e-6, gas, raw, CASE, case_from_raw)
     name = START_MODEL[gap_um]
     model = ported_models(raw, CASE, DEPTH, gap_um * 1e-6, gas, (name,), case_from_raw,
                           FIT)[name]
-    return (ports, *initial_state(model, math.radians(START_DEG)))
+    return (ports, *initial_state(model, math.radians(start_deg)))
 
 
 def _reference_chunks(gap_um: int) -> list:
@@ -260,19 +269,21 @@ def study(runs: Path, gap_um: int, factor: float = 1.5) -> Path:
     return path
 
 
-def grid(runs: Path, gap_um: int) -> Path:
-    """The first GRID_SPAN degrees from the recorded run's start on three grids refined
-    by a constant ratio in both directions, the step with the cell (the gap's Courant
-    number held): the run's grid's error in each chamber's pressure against the
-    Richardson extrapolation (:func:`.moving_ported.grid_error`,
-    ``ported_<GAP>um_grid.json``)."""
-    ports, p, T = _start(gap_um)
-    span, every, refines = GRID_SPAN[gap_um]
+def grid(runs: Path, gap_um: int, opening: bool = False) -> Path:
+    """The first GRID_SPAN degrees from the recorded run's start (``opening``: the
+    GRID_OPENING degrees) on three grids refined by a constant ratio in both directions,
+    the step with the cell (the gap's Courant number held): the run's grid's error in
+    each chamber's pressure against the Richardson extrapolation
+    (:func:`.moving_ported.grid_error`, ``ported_<GAP>um_grid[_opening].json``)."""
+    _, every, refines = GRID_SPAN[gap_um]
+    start, span = GRID_OPENING if opening else (START_DEG, GRID_SPAN[gap_um][0])
+    ports, p, T = _start(gap_um, start)
     rows, pressures = [], []
     for refine in refines:
-        s = section(gap_um, START_DEG, span, ports, refine, initial_p=p, initial_T=T)
+        s = section(gap_um, start, span, ports, refine, initial_p=p, initial_T=T)
         steps = int(round(SETTINGS[gap_um][3] * refine))
-        folder = runs / f"ported-{gap_um}um-grid-{s.spec.columns}x{s.spec.cells_across_gap}"
+        folder = runs / (f"ported-{gap_um}um-grid-{start:g}deg-"
+                         f"{s.spec.columns}x{s.spec.cells_across_gap}")
         run = run_moving_section(s, folder, RunControls(
             steps_per_frame=steps, write_every_frames=every,
             max_courant=MAX_COURANT[gap_um]))
@@ -287,9 +298,9 @@ def grid(runs: Path, gap_um: int) -> Path:
         print(f"{folder.name}: {run.run_time_s:.0f} s, Courant {run.max_courant:.2f}",
               flush=True)
     ratio, of = refines[1] / refines[0], refines.index(1.0)
-    out = {"span_deg": span, "ratio": ratio, "run_grid": of, "runs": rows,
-           "pressures": pressures, **grid_error(pressures, ratio, of)}
-    path = HERE / f"ported_{gap_um}um_grid.json"
+    out = {"start_deg": start, "span_deg": span, "ratio": ratio, "run_grid": of,
+           "runs": rows, "pressures": pressures, **grid_error(pressures, ratio, of)}
+    path = HERE / f"ported_{gap_um}um_grid{'_opening' if opening else ''}.json"
     path.write_text(json.dumps(out, indent=1, allow_nan=True) + "\n")
     return path
 
@@ -339,7 +350,8 @@ def pimple(runs: Path, gap_um: int) -> Path:
 
 if __name__ == "__main__":
     runs_dir, gap, what = Path(sys.argv[1]), int(sys.argv[2]), sys.argv[3:4]
-    mode = {"study": study, "grid": grid, "pimple": pimple, "retopo": retopo}.get(
+    mode = {"study": study, "grid": grid, "pimple": pimple, "retopo": retopo,
+            "opening": lambda r, g: grid(r, g, opening=True)}.get(
         what[0] if what else "")
     print(mode(runs_dir, gap) if mode else main(runs_dir, gap,
                                                 float(what[0]) if what else None))

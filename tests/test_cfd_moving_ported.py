@@ -279,16 +279,17 @@ def test_differences_are_taken_at_the_angles_both_runs_were_written_at():
 
 
 #: Recorded grid studies (record_ported.py grid): the first degrees on three grids
-#: refined by a constant ratio, the run's among them.
-GRIDS = {g: ROOT / "tests" / "data" / "cfd" / "moving" / f"ported_{g}um_grid.json"
-         for g in (100, 20)}
+#: refined by a constant ratio, the run's among them; and (mode opening) the same
+#: through slot 2's discharge opening, where the runs differ most from every model.
+GRIDS = {(g, kind): ROOT / "tests" / "data" / "cfd" / "moving" / f"ported_{g}um_{kind}.json"
+         for g in (100, 20) for kind in ("grid", "grid_opening")}
 
 
-@pytest.mark.parametrize("gap_um", list(GRIDS))
-def test_the_ported_runs_grid_error_is_what_its_three_grids_give(gap_um):
+@pytest.mark.parametrize("gap_um, kind", list(GRIDS))
+def test_the_ported_runs_grid_error_is_what_its_three_grids_give(gap_um, kind):
     from rotorflow.cases.moving_ported import grid_error
 
-    rec = json.loads(GRIDS[gap_um].read_text())
+    rec = json.loads(GRIDS[gap_um, kind].read_text())
     runs, ratio, of = rec["runs"], rec["ratio"], rec["run_grid"]
     # a constant ratio, the step with the cell
     for coarse, fine in zip(runs, runs[1:], strict=False):
@@ -301,6 +302,8 @@ def test_the_ported_runs_grid_error_is_what_its_three_grids_give(gap_um):
            {**rec["pressures"][2], "p": {c: [x * 1.002 for x in v]
                                          for c, v in rec["pressures"][2]["p"].items()}}]
     assert grid_error(bad, ratio, of)["chambers"] != pytest.approx(rec["chambers"], rel=1e-3)
+    if kind == "grid_opening":
+        return
     # every chamber but one holds its grid error below 0.5 % of the swing; the one whose
     # pressure moves most over the span (the dying chamber, open to the discharge port:
     # the port's gas column rings in it, +-0.2 bar at 100 um) carries the largest, the
@@ -309,3 +312,30 @@ def test_the_ported_runs_grid_error_is_what_its_three_grids_give(gap_um):
     ringing = max(fine, key=lambda c: np.nanmax(fine[c]) - np.nanmin(fine[c]))
     assert rec["max"] == rec["chambers"][ringing]
     assert max(v for c, v in rec["chambers"].items() if c != ringing) <= 0.005
+
+
+@pytest.mark.parametrize("gap_um", (100, 20))
+def test_the_discharge_openings_peak_is_the_runs_and_not_its_grids(gap_um):
+    """Where each record differs most from every model (slot 2 at 170-171 deg, the
+    models' ideal port holding it at the plenum's pressure from its opening), the CFD's
+    chamber goes on compressing after its port opens: the gas column in the port has to
+    be set moving first.  That peak is the CFD's, not its grid's: from the same start it
+    stands above the plenum on each of the three grids by more than half the record's
+    excess (the grid runs start from the model's state, lower than the record's, 2 kPa
+    at 100 um), and the run's grid's error there is a fraction of the difference from
+    the models that the record reports."""
+    rec = json.loads(GRIDS[gap_um, "grid_opening"].read_text())
+    ported = json.loads(PORTED[gap_um].read_text())
+    p_d = load_toml(CASE)["operating"]["p_discharge_bar"] * 1e5
+    tail = np.asarray(ported["cfd"]["chambers"]["angles_deg"]) >= (
+        ported["cfd"]["chambers"]["angles_deg"][-1] - 60.0 - 1e-9)
+    excess = np.nanmax(np.asarray(ported["cfd"]["chambers"]["p"]["2"], float)[tail]) - p_d
+    assert excess > 0.1 * (p_d - 1e5)  # the record's own peak: 47 kPa at 100 um
+    for run in rec["pressures"]:
+        assert np.nanmax(np.asarray(run["p"]["2"], float)) - p_d > 0.5 * excess
+    for name, m in ported["models"].items():
+        e = m["errors"]
+        assert max(e, key=lambda c: e[c]["max"] if c != "all" else -1.0) == "2", name
+        assert 170.0 <= e["2"]["max_at_deg"] <= 171.0
+        # the grid's share: 7.5 kPa against 47 at 100 um
+        assert rec["chambers"]["2"] * rec["swing_Pa"] < 0.25 * e["2"]["max"] * e["all"]["swing_Pa"]

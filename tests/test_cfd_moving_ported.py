@@ -339,3 +339,101 @@ def test_the_discharge_openings_peak_is_the_runs_and_not_its_grids(gap_um):
         assert 170.0 <= e["2"]["max_at_deg"] <= 171.0
         # the grid's share: 7.5 kPa against 47 at 100 um
         assert rec["chambers"]["2"] * rec["swing_Pa"] < 0.25 * e["2"]["max"] * e["all"]["swing_Pa"]
+
+
+def _blow_down(p0: float, T0: float, volume, area, p_d: float, column: float,
+               degrees: np.ndarray, omega: float, gas) -> np.ndarray:
+    """An independent construction of a chamber opening to its port: the chamber
+    isentropic and uniform (``volume(deg)``, m3), its gas leaving through ``area(deg)``
+    (m2) as a column ``column`` m long that the pressure difference less the exit loss
+    (the jet's dynamic pressure, not recovered in the plenum) accelerates:
+    rho L dw/dt = p - p_d - rho w |w| / 2.  Explicit steps of 1e-3 deg; the pressure at
+    ``degrees``."""
+    h = math.radians(1e-3) / omega
+    deg, w = float(degrees[0]), 0.0
+    rho = p0 / (gas.R * T0)
+    mass, entropy = rho * volume(deg), p0 / rho ** gas.gamma
+    out, k = [], 0
+    while k < len(degrees):
+        rho = mass / volume(deg)
+        p = entropy * rho ** gas.gamma
+        if deg >= degrees[k] - 1e-9:
+            out.append(p)
+            k += 1
+        a = area(deg)
+        w = w + h * (p - p_d - 0.5 * rho * w * abs(w)) / (rho * column) if a > 0 else 0.0
+        mass -= h * rho * a * w
+        deg += 1e-3
+    return np.array(out)
+
+
+@pytest.mark.parametrize("gap_um", (100, 20))
+def test_the_opening_peak_is_the_ports_gradual_opening(gap_um):
+    """Why the runs differ most from the models at slot 2's discharge opening.  The
+    models open the port on the chamber's whole end-face section at the opening angle
+    (the internal gear's table: area_hp is the section, 320 mm2 here; ideal ports then
+    equalise at once, nozzle ports within 0.5 deg); the CFD's port is the product's
+    polygon, whose overlap with the chamber grows from nothing (7 mm2 0.5 deg after the
+    opening, 47 mm2 3.5 deg after).  A uniform isentropic chamber of the model's volume,
+    started from the record's pressure 1 deg before the opening, blowing down through
+    that overlap (the CFD's outline) with the slab's gas column (the one-cell slab's port
+    face moves its cell's gas across the whole 10 mm depth) and exit loss, peaks where
+    the record does: 2.82 / 3.10 bar against 2.86 / 3.07 at 20 / 100 um (2.80 / 3.09
+    with a column a tenth as long: the column adds little).  Through the whole section
+    from the opening it rises no further.  Leakage is left out of the construction, so
+    it is held to 2.5 % of the swing."""
+    from manifold3d import CrossSection, FillRule
+
+    from rotorflow.cases.moving_ports import slab_machine, slab_ports
+    from rotorflow.geometry.internal_gear.family import examples
+    from rotorflow.geometry.ports import chamber_section
+
+    rec = json.loads(PORTED[gap_um].read_text())
+    run = rec["cfd"]
+    depth = run["depth_m"]
+    raw, gas, pair = load_toml(CASE), PerfectGas(), examples()["table1"]
+    ports, _ = slab_ports(pair, depth, run["gap_m"], gas, raw, CASE, case_from_raw)
+    _, machine, _ = slab_machine(pair, depth, run["gap_m"], gas, raw, CASE, case_from_raw)
+    model = ported_models(raw, CASE, depth, run["gap_m"], gas, ["nozzle"],
+                          case_from_raw)["nozzle"]
+    outline = CrossSection([np.ascontiguousarray(q) for q in map(np.asarray, ports.discharge)],
+                           FillRule.NonZero)
+    period = float(pair.period)
+
+    def overlap(deg):  # slot 2's section inside the discharge outline
+        polys = chamber_section(machine, math.radians(deg) + 2 * period)
+        return (CrossSection([np.ascontiguousarray(q) for q in polys], FillRule.Positive)
+                ^ outline).area() if polys else 0.0
+
+    grid = np.arange(167.5, 173.0, 0.05)
+    areas = np.array([overlap(d) for d in grid])
+    volumes = slot_pressures(model, np.radians(grid), "volume_m3")[:, 1]
+    opening = grid[np.argmax(areas > 0.01 * areas.max())]  # past the outline's slivers
+    cfd = run["chambers"]
+    angles = np.asarray(cfd["angles_deg"])
+    tail = angles >= angles[-1] - 60.0 - 1e-9
+    seen = angles[tail]
+    p_cfd = np.asarray(cfd["p"]["2"], float)[tail]
+    start = float(seen[np.searchsorted(seen, opening - 1.0) - 1])
+    at = seen[(seen >= start) & (seen <= start + 3.0)]
+    p0 = float(np.interp(start, seen, p_cfd))
+    T_m, p_m = (float(slot_pressures(model, [math.radians(start)], k)[0, 1])
+                for k in ("T_K", "p_Pa"))
+    T0 = T_m * (p0 / p_m) ** ((gas.gamma - 1.0) / gas.gamma)  # the model's, compressed on
+    p_d = model.plenums["discharge"][0]
+    omega = 2500.0 * 2.0 * math.pi / 60.0  # the recorded runs' speed (record_ported.py)
+
+    def volume(d):
+        return np.interp(d, grid, volumes)
+
+    def blow_down(area):
+        return _blow_down(p0, T0, volume, area, p_d, depth, at, omega, gas)
+
+    gradual = blow_down(lambda d: np.interp(d, grid, areas))
+    whole = blow_down(lambda d: volume(d) / depth if d >= opening else 0.0)
+    want = np.interp(at, seen, p_cfd)
+    swing = rec["models"]["nozzle"]["errors"]["all"]["swing_Pa"]
+    assert want.max() - p_d > 0.1 * swing  # the record's peak stands above the plenum
+    assert abs(gradual.max() - want.max()) < 0.025 * swing
+    assert abs(at[np.argmax(gradual)] - at[np.argmax(want)]) <= 0.5 + 1e-9
+    assert whole[at >= opening].max() <= np.interp(opening, at, whole) + 1e-3 * swing

@@ -35,6 +35,11 @@ line against the rotors' polygons gives the width at any angle (:class:`CuspRay`
 the sweep integrates it without interpolating across its jumps (a lobe's rounded tip
 reaching the cusp line cuts the segment short at once).  Which chambers the cut joins
 changes only where a tip crosses the cusp, an angle known in closed form.
+
+A pair with lands (the trochoidal pump profile) has a land on each cusp at every angle,
+so its chambers meet across the cusp line away from the cusp points, in the pocket
+between the flanks: :mod:`.flank_pocket` gives that cut's width and where it changes
+hands (a corner crossing a cusp); the nodes' bookings are the same.
 """
 
 from __future__ import annotations
@@ -46,6 +51,7 @@ import numpy as np
 
 from ..planar import TWO_PI
 from ..section import Opening
+from .flank_pocket import PocketRay, corner_crossings
 from .regions import FEMALE, MALE
 
 #: The openings' names: at the bottom cusp, where the lobes go into mesh and the chambers
@@ -249,7 +255,10 @@ def build_openings(pair, psi, per_node, tracks=()) -> tuple[Opening, ...]:
     chamber lies beyond between two tip crossings; the ray gives the width, along the
     cusp line or, with ``pair.blow_hole == "plane"``, towards the contact line's point
     nearest the cusp (seed 004's plane, found among the interlobe ``tracks``)."""
-    ray = CuspRay(pair)
+    # Lands cover the cusps: the opening is the flank pocket's cut, which changes
+    # hands where a corner crosses a cusp (:mod:`.flank_pocket`).
+    lands = pair.has_lands
+    ray = PocketRay(pair) if lands else CuspRay(pair)
     booked = defaultdict(set)
     for i, items in enumerate(per_node):
         for name, offset, _ in items:
@@ -257,8 +266,9 @@ def build_openings(pair, psi, per_node, tracks=()) -> tuple[Opening, ...]:
     out = []
     for name in sorted(booked):
         top = name == NAMES[True]
-        events = np.concatenate([[psi[0]], tip_crossings(pair, psi[0], psi[-1], top),
-                                 [psi[-1]]])
+        cross = (corner_crossings(pair, psi[0], psi[-1]) if lands
+                 else tip_crossings(pair, psi[0], psi[-1], top))
+        events = np.concatenate([[psi[0]], cross, [psi[-1]]])
         slot = np.searchsorted(events, psi, side="right") - 1
         votes = defaultdict(lambda: defaultdict(int))
         for i, offset in booked[name]:

@@ -206,10 +206,17 @@ class Boundaries(TipBands):
         """A run along the cusp line that starts or ends at a cusp point is the part's
         opening across the cusp plane there (the blow-hole's section, :mod:`.blowhole`)."""
         tol = CUSP_POINT * self.C
+        at_cusp = False
         for y in (self.yc, -self.yc):
             if min(abs(a[1] - y), abs(b[1] - y)) < tol:
                 part.cusp_cut += length
                 part.cusp_top = y > 0.0
+                at_cusp = True
+        if not at_cusp and any(self._lands):
+            # Lands cover the cusps: the chambers meet across the cusp line in the
+            # pocket between the flanks (:mod:`.flank_pocket`), named by its side.
+            part.cusp_cut += length
+            part.cusp_top = a[1] + b[1] > 0.0
 
     def _run_true(self, r, idx, chords):
         """(area to add to the polygon's, true length) of a run along rotor r whose
@@ -278,7 +285,7 @@ class Boundaries(TipBands):
             return cusps[i] if dc[i] < d[j] else corners[j]
         end = cusps[i] if dc[i] < d[j] else corners[j]
         if dc[i] >= d[j]:
-            part.tips.append((r, j // 2, corners[j]))
+            part.corners.append((r, j, corners[j]))
         return self.gap_middle(r, end, j // 2, psi)
 
     def gap_middle(self, r, end, lobe, psi):

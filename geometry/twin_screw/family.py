@@ -141,6 +141,11 @@ def from_section(m: dict, where: str) -> TwinScrewPair:
         pair = build(m.get("profile", "circular"), n1, n2, c, d1, d2, tip)
     except CaseError as e:
         raise CaseError(f"{e} ({where})") from None
+    if hole == "plane" and pair.has_lands:
+        # seed 004's plane runs through the contact line's end at a cusp; lands cover
+        # the cusps, and the chambers meet in the flank pocket instead (.flank_pocket)
+        raise CaseError(f"blow_hole = 'plane' in {where}: the {pair.label} profile's "
+                        f"lands cover the cusps; its blow-hole is the cusp plane's")
     return dataclasses.replace(pair, blow_hole=hole)
 
 

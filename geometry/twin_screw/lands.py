@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from ..planar import TWO_PI
+from .boundaries import MALE
 from .pair import TIP_SCAN
 from .profiles import TwinProfile
 
@@ -77,3 +78,32 @@ def find_land(profile: TwinProfile, c: float):
         else:
             hi = x
     return 0.5 * (lo + hi) % per, top, (ua, ub)
+
+
+def corner_seals(pair, parts, qs):
+    """The land corners' sealing points (:meth:`.boundaries.Boundaries._snap_land`), for
+    :func:`.section._seals`: (chamber, track name, kind, point, chamber beyond, rate).
+
+    A land's corner is a sealing point whenever it bounds a part: the land's other
+    corner need not (it may still be in the other bore), and on a one-lobe rotor both
+    corners bound the one groove, in one life in the section.  Across the land lies the
+    neighbouring groove one lobe period on in age: on a one-lobe rotor the groove's own
+    next turn, one lead along the rotor (the land is a helical band between two turns
+    of one channel), which the section cannot show (its land's far side is the same
+    groove).  So beyond a leading corner is the chamber one period older, beyond a
+    trailing one the chamber one period younger.  A groove runs from its lobe's
+    counter-clockwise corner (odd index) to the next lobe's clockwise one (even): the
+    male turns counter-clockwise, led by the even corner; the female clockwise, by the
+    odd one."""
+    out = []
+    g = pair.gearing
+    for p, q in zip(parts, qs, strict=True):
+        for rotor, j, pt in p.corners:
+            leading = (j % 2 == 0) if rotor == MALE else (j % 2 == 1)
+            name = f"tip-{'male' if rotor == MALE else 'female'}-{'lead' if leading else 'trail'}"
+            axis = np.zeros(2) if rotor == MALE else g.female_axis
+            w = 1.0 if rotor == MALE else -g.lobes_male / g.lobes_female
+            rel = pt - axis
+            out.append((q, name, "tip", pt, q + (1 if leading else -1),
+                        w * np.array([-rel[1], rel[0]])))
+    return out

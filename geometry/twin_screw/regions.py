@@ -105,6 +105,10 @@ class Part:
     torque: np.ndarray  # (2,)
     perimeter: np.ndarray  # (2,) wetted rotor edge length
     tips: list = field(default_factory=list)  # (rotor, tip index, point)
+    #: (rotor, corner index, point): the land corners that close it on its bore (a
+    #: rotor with lands books these, not tips: a land's two corners bound different
+    #: grooves, or on a one-lobe rotor the one groove at both ends)
+    corners: list = field(default_factory=list)
     contacts: list = field(default_factory=list)  # points
     contact_rates: list = field(default_factory=list)  # d point / d psi of each
     side: str = ""  # "top" (newborn side), "bottom" (dying side) or "" (isolated)
@@ -336,8 +340,8 @@ class SectionCutter(GrooveAges, Boundaries):
             force = np.zeros((2, 2))
             force[rotor] = (fb[1] - fa[1], -(fb[0] - fa[0]))
             return Part(rotor, groove, age, ref.area, force, np.zeros(2), ref.perimeter.copy(),
-                        tips=[(rotor, (groove + 1) % n, a), (rotor, groove, b)], side="",
-                        polygons=rings)
+                        corners=[(rotor, (2 * groove + 2) % (2 * n), a),
+                                 (rotor, 2 * groove + 1, b)], side="", polygons=rings)
         # (squared distances: the order is the distances')
         diff = rings[0][None, :, :] - tips[:, None, :]
         near = np.min(np.einsum("tvk,tvk->tv", diff, diff), 1)

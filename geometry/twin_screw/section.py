@@ -18,7 +18,8 @@ pairing at the bottom cusp).
 Sealing points per chamber (tracks): both tips of the male groove and of the female
 groove while they seal on their bores (beyond a leading tip the chamber one period
 older, beyond a trailing one the one a period younger, or a revolution off where that
-groove has begun its next life), and the interlobe contacts: in the newborn part the
+groove has begun its next life; a land's corners: :func:`.lands.corner_seals`), and the
+interlobe contacts: in the newborn part the
 chamber beyond is older ("interlobe-lead"), in the dying part younger ("-trail").
 """
 
@@ -33,6 +34,7 @@ from rotorflow.errors import CaseError
 from ..planar import TWO_PI
 from ..section import POINTS_PER_PERIOD, SectionChamber, Track
 from .blowhole import build_openings, openings_of
+from .lands import corner_seals
 from .load_events import load_events
 from .regions import FEMALE, MALE
 from .track_ends import refine
@@ -191,6 +193,7 @@ def _seals(pair, parts, qs):
             w = 1.0 if rotor == MALE else -pair.gearing.lobes_male / pair.gearing.lobes_female
             rel = pt - axis
             out.append((q, name, "tip", pt, q2, w * np.array([-rel[1], rel[0]])))
+    out.extend(corner_seals(pair, parts, qs))
     tol = SAME_POINT * pair.gearing.centre_distance
     contacts = [(q, p.rotor, c, r) for p, q in zip(parts, qs, strict=True)
                 for c, r in zip(p.contacts, p.contact_rates, strict=True)]

@@ -104,7 +104,7 @@ GRID_SPAN = {100: (4.0, 2, (0.5, 1.0, 2.0)), 20: (1.0, 2, (1.0, 1.5, 2.25))}
 #: rises 1.5 deg on and rings), so the three grids turn through it, each from the
 #: START_MODEL's periodic state at the first angle (``ported_<GAP>um_grid_opening.json``):
 #: (first angle, degrees) per clearance; at 20 um to the peak only (its finest grid
-#: costs ~4 min of solver a degree).
+#: took 8 min of solver a degree, 2,000 s for the 4 deg).
 GRID_OPENING = {100: (166.0, 8.0), 20: (168.5, 4.0)}
 #: Cost control (:func:`pimple`), per clearance: degrees from the start, and (steps per
 #: frame, PIMPLE outer correctors) of each variant, against the recorded run (PISO at

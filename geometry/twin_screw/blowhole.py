@@ -51,7 +51,6 @@ import numpy as np
 
 from ..planar import TWO_PI
 from ..section import Opening
-from .flank_pocket import PocketRay, corner_crossings
 from .regions import FEMALE, MALE
 
 #: The openings' names: at the bottom cusp, where the lobes go into mesh and the chambers
@@ -256,7 +255,10 @@ def build_openings(pair, psi, per_node, tracks=()) -> tuple[Opening, ...]:
     cusp line or, with ``pair.blow_hole == "plane"``, towards the contact line's point
     nearest the cusp (seed 004's plane, found among the interlobe ``tracks``)."""
     # Lands cover the cusps: the opening is the flank pocket's cut, which changes
-    # hands where a corner crosses a cusp (:mod:`.flank_pocket`).
+    # hands where a corner crosses a cusp (:mod:`.flank_pocket`, built on CuspRay:
+    # imported here).
+    from .flank_pocket import PocketRay, corner_crossings
+
     lands = pair.has_lands
     ray = PocketRay(pair) if lands else CuspRay(pair)
     booked = defaultdict(set)

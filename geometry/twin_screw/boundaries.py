@@ -48,6 +48,15 @@ CUSP_POINT = 5e-5
 MALE, FEMALE, BORE_M, BORE_F, CUSP, NEW = 0, 1, 2, 3, 4, -1
 
 
+def turning_rate(gearing, rotor: int, point: np.ndarray) -> np.ndarray:
+    """d point / d psi of a point turning with ``rotor`` (psi the male angle): its speed
+    ratio times J (point - axis), the female turning back at N_male / N_female."""
+    axis = np.zeros(2) if rotor == MALE else gearing.female_axis
+    w = 1.0 if rotor == MALE else -gearing.lobes_male / gearing.lobes_female
+    rel = point - axis
+    return w * np.array([-rel[1], rel[0]])
+
+
 @dataclass
 class _Run:
     """A wetted arc of one rotor in a part, from a to b; an end at a contact is

@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from ..planar import TWO_PI
+from .blowhole import CuspRay
 from .boundaries import CUSP_POINT
 from .regions import FEMALE, MALE
 
@@ -32,21 +33,11 @@ from .regions import FEMALE, MALE
 POCKET_CHUNK = 64
 
 
-class PocketRay:
+class PocketRay(CuspRay):
     """Free length of the cusp line between the cusps, away from both cusp points, on
     one side of the line of centres (the interface :class:`.blowhole.WidthTable` reads:
-    ``pair`` and ``width(psi, top, direction)``)."""
-
-    def __init__(self, pair):
-        self.pair = pair
-        self.xc, self.yc = pair.cusp
-        g = pair.gearing
-        self.ratio = g.lobes_male / g.lobes_female
-        self.axes = (np.zeros(2), np.array([g.centre_distance, 0.0]))
-        self.edges = []
-        for r in (MALE, FEMALE):
-            p = pair.cutter.profile_samples[r][1]
-            self.edges.append((p, np.roll(p, -1, axis=0)))
+    ``pair`` and ``width(psi, top, direction)``).  The cusp ray's frame and edges: its
+    pruning keeps every edge that can reach the line x = x_c, which is all this needs."""
 
     def width(self, psi, top: bool, direction=None) -> np.ndarray:
         """Length of the cusp line's free stretches that reach neither cusp point and
@@ -59,8 +50,8 @@ class PocketRay:
                                    for i in range(0, len(psi), POCKET_CHUNK)])
         ys, owner = [], []
         for r in (MALE, FEMALE):
-            a, b = self.edges[r]
-            ang = (psi if r == MALE else -self.ratio * psi)[:, None]
+            a, b = self.edges[r][:2]
+            ang = self.angle(r, psi)[:, None]
             c, s = np.cos(ang), np.sin(ang)
             o = self.axes[r]
             xa = c * a[None, :, 0] - s * a[None, :, 1] + o[0] - self.xc

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ..planar import TWO_PI
-from .boundaries import MALE
+from .boundaries import MALE, turning_rate
 from .pair import TIP_SCAN
 from .profiles import TwinProfile
 
@@ -96,14 +96,10 @@ def corner_seals(pair, parts, qs):
     male turns counter-clockwise, led by the even corner; the female clockwise, by the
     odd one."""
     out = []
-    g = pair.gearing
     for p, q in zip(parts, qs, strict=True):
         for rotor, j, pt in p.corners:
             leading = (j % 2 == 0) if rotor == MALE else (j % 2 == 1)
             name = f"tip-{'male' if rotor == MALE else 'female'}-{'lead' if leading else 'trail'}"
-            axis = np.zeros(2) if rotor == MALE else g.female_axis
-            w = 1.0 if rotor == MALE else -g.lobes_male / g.lobes_female
-            rel = pt - axis
             out.append((q, name, "tip", pt, q + (1 if leading else -1),
-                        w * np.array([-rel[1], rel[0]])))
+                        turning_rate(pair.gearing, rotor, pt)))
     return out

@@ -34,6 +34,7 @@ from rotorflow.errors import CaseError
 from ..planar import TWO_PI
 from ..section import POINTS_PER_PERIOD, SectionChamber, Track
 from .blowhole import build_openings, openings_of
+from .boundaries import turning_rate
 from .lands import corner_seals
 from .load_events import load_events
 from .regions import FEMALE, MALE
@@ -188,11 +189,7 @@ def _seals(pair, parts, qs):
             else:
                 leading = (k == (p.groove + 1) % n) if rotor == MALE else (k == p.groove)
             name = f"tip-{'male' if rotor == MALE else 'female'}-{'lead' if leading else 'trail'}"
-            # A tip turns with its rotor: d point / d psi = speed ratio x J (point - axis).
-            axis = np.array([0.0, 0.0]) if rotor == MALE else pair.gearing.female_axis
-            w = 1.0 if rotor == MALE else -pair.gearing.lobes_male / pair.gearing.lobes_female
-            rel = pt - axis
-            out.append((q, name, "tip", pt, q2, w * np.array([-rel[1], rel[0]])))
+            out.append((q, name, "tip", pt, q2, turning_rate(pair.gearing, rotor, pt)))
     out.extend(corner_seals(pair, parts, qs))
     tol = SAME_POINT * pair.gearing.centre_distance
     contacts = [(q, p.rotor, c, r) for p, q in zip(parts, qs, strict=True)

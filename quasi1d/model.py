@@ -46,8 +46,8 @@ from . import events, flows, kernel, liquid
 from .chamber import ChamberGeometry
 from .heat import WALL_AREA_FACTOR, WallHeat, wall_heat
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_Q, ACC_W, AccColumns, Segment, segments
-from .oil import node_loads, oil_leak_balances, slot_balances
 from .oil import leakage as oil_leakage
+from .oil import node_loads, oil_leak_balances, slot_balances
 from .paths import resolve
 from .plenums import Plenum, liquid_ratio, plenums
 from .settings import Leakage, Operating, Ports

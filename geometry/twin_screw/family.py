@@ -8,8 +8,10 @@
   the female lies inside its pitch circle, so female_diameter_mm is its pitch diameter
   and the male's addendum is the pin radius), or "trochoidal" (a screw-pump profile of
   identical rotors with sharp tip corners, :mod:`.pump_profiles`; equal lobe counts and
-  diameters).  With equal lobe counts and diameters, "circular" makes identical rotors
-  too (the screw pumps' circular profile, seed 003);
+  diameters), or "involute" (the screw pumps' rack of straight flanks and tip and root
+  circles, :mod:`.pump_profiles`; identical rotors likewise).  With equal lobe counts
+  and diameters, "circular" makes identical rotors too (the screw pumps' circular
+  profile, seed 003);
 * ``lobes_male``, ``lobes_female``: any combination (3/5, 4/5, 4/6, 5/6, 5/7, ...);
 * ``centre_distance_mm``: the pitch circles follow, r = C N / (N1 + N2);
 * ``male_diameter_mm``, ``female_diameter_mm``: the outer diameters, which fix the
@@ -17,7 +19,9 @@
 * ``tip_radius_mm`` (optional): the rack's male-tip circle; by default the one that
   centres the female tip's circle on the pitch line (circular; for equal lobe counts
   and diameters the one of equal circles, whose rotors are identical) or 0.9 of it
-  (line-circle, so that the straight flank exists);
+  (line-circle, so that the straight flank exists); on the involute pump rack its tip
+  and root circles' radius (default the addendum: both centred on the pitch line),
+  which sets the flanks' pressure angle;
 * ``blow_hole`` (optional): the surface that spans the blow-hole (:mod:`.blowhole`),
   "cusp-plane" (default) or "plane" (seed 004's plane through the contact line's end).
 """
@@ -34,7 +38,13 @@ from .circular import symmetric_circular_pair
 from .meshing import Gearing
 from .pair import TwinScrewPair
 from .pin_cycloid import pin_cycloid_pair
-from .pump_profiles import check_identical, identical_pair, identical_tip_radius, trochoidal_pair
+from .pump_profiles import (
+    check_identical,
+    identical_pair,
+    identical_tip_radius,
+    involute_pair,
+    trochoidal_pair,
+)
 
 KEYS = frozenset({"profile", "lobes_male", "lobes_female", "centre_distance_mm",
                   "male_diameter_mm", "female_diameter_mm", "tip_radius_mm", "blow_hole"})
@@ -68,9 +78,9 @@ def _trochoidal(gearing: Gearing, male_addendum: float, female_addendum: float,
 
 
 PROFILES = {"circular": symmetric_circular_pair, "line-circle": asymmetric_pair,
-            "pin-cycloid": _pin_cycloid, "trochoidal": _trochoidal}
-#: Profiles with no rack tip circle (tip_radius_mm does not apply).
-NO_TIP_RADIUS = ("pin-cycloid", "trochoidal")
+            "pin-cycloid": _pin_cycloid, "trochoidal": _trochoidal, "involute": involute_pair}
+#: Profiles with no rack tip circle (tip_radius_mm does not apply), or their own default.
+NO_TIP_RADIUS = ("pin-cycloid", "trochoidal", "involute")
 #: A female outer radius this close (per C) to the pitch radius is on it.
 PITCH_TOL = 1e-9
 #: The line-circle rack's default male-tip circle, per the centred one: 10 % smaller

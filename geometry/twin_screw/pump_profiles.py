@@ -26,7 +26,18 @@ names the circular, trochoidal and involute profiles; it gives no dimensions):
   tip and root arcs take half a lobe each.  Sharp tip corners: small carry-over, large
   blow-hole (the seed's words).
 
-The involute pump profile (a trapezoidal rack) is not built yet.
+* ``involute`` (:func:`involute_rack`): a rack of straight flanks joined by a tip and a
+  root circle of one radius, tangent to both (rack generation, as seed 003 says of its
+  involute profile).  Each straight flank generates on both rotors an involute of the
+  base circle r cos(alpha), alpha the flank's inclination from the line of centres (the
+  pressure angle); the circles round the tips and the roots.  The rack is symmetric
+  about its flanks' midpoints on the pitch line, so male and female are one rotor.  The
+  circles' radius fixes alpha, since the four pieces fill one pitch: from the largest
+  radius (no flank left: the circular profile) down to where the flanks lie along the
+  pitch line.  By default the circles are centred on the pitch line (radius = the
+  addendum; cos alpha = 4 h / p, h the addendum and p the rack's pitch), as the
+  circular profile's default centres its circle there.  Rounded
+  tips like the circular's: the seed groups the two ("high carryover").
 """
 
 from __future__ import annotations
@@ -35,10 +46,10 @@ import math
 
 from rotorflow.errors import CaseError
 
-from .arcs import CircleArc
+from .arcs import CircleArc, Line
 from .meshing import Gearing, OnRotor
 from .point_generated import PointTrace, check_no_overlap
-from .profiles import TwinProfile, check_no_loop
+from .profiles import TwinProfile, check_no_loop, rack_pair
 
 
 def identical_pair(gearing: Gearing, male_addendum: float, female_addendum: float) -> bool:
@@ -105,3 +116,56 @@ def trochoidal_pair(gearing: Gearing, outer_radius: float) -> tuple[TwinProfile,
         check_no_loop(profile, c)
     check_no_overlap(male, female, g)
     return male, female
+
+
+def involute_rack(gearing: Gearing, addendum: float, radius: float | None = None):
+    """One pitch of the involute pump rack (module docstring), ordered along +b: the
+    tip circle (centre a = h - rho), the falling flank, the root circle (a = rho - h),
+    the rising flank; h the addendum of both rotors, rho the circles' radius (default
+    h, or half the circular profile's where that is smaller).  The flank's angle alpha
+    from the a axis solves p/2 cos(a) + 2 (rho - h) sin(a)
+    = 2 rho (the pieces fill half a pitch: p/2 - 2 h tan(a) = 2 rho (1 - sin a) / cos a)."""
+    h, half = addendum, 0.5 * gearing.pitch
+    # The circles alone fill the pitch at the circular profile's radius: there the two
+    # roots alpha = phi +- acos(2 rho / norm) meet, and the flank has no length.
+    widest = identical_tip_radius(gearing, h)
+    if radius is None:  # (many shallow lobes: circles of the addendum would leave none)
+        rho = h if h < widest else 0.5 * widest
+    else:
+        rho = radius
+    if not rho > 0.0:
+        raise CaseError(f"tip_radius_mm = {rho * 1e3:.4g}: the involute pump rack's tip and "
+                        f"root circles need a positive radius")
+    if not rho < widest:
+        raise CaseError(f"tip_radius_mm = {rho * 1e3:.4g} leaves the involute pump rack no "
+                        f"straight flank: its circles must be smaller than "
+                        f"{widest * 1e3:.4g} mm (the circular profile's)")
+    big = 2.0 * (rho - h)
+    norm = math.hypot(half, big)
+    alpha = math.atan2(big, half) + math.acos(min(1.0, 2.0 * rho / norm))
+    if not 0.0 < alpha < 0.5 * math.pi:
+        raise CaseError(f"the involute pump rack's circles (tip_radius_mm = {rho * 1e3:.4g}) "
+                        f"leave no flank: its angle would be {math.degrees(alpha):.4g} deg")
+    s, c = math.sin(alpha), math.cos(alpha)
+    g = 0.5 * math.pi - alpha  # each circle's half span about its apex
+    tip = CircleArc("tip circle", (h - rho, 0.0), rho, -g, g)
+    root = CircleArc("root circle", (rho - h, half), rho, math.pi + g, math.pi - g)
+    top, low = h - rho * (1.0 - s), rho * (1.0 - s) - h
+    fall = Line("falling flank", (top, rho * c), (low, half - rho * c))
+    rise = Line("rising flank", (low, half + rho * c), (top, 2.0 * half - rho * c))
+    return tip, fall, root, rise
+
+
+def pressure_angle(rack) -> float:
+    """The involute rack's flank angle from the line of centres (its pressure angle)."""
+    fall = rack[1]
+    (a0, b0), (a1, b1) = fall.start, fall.end
+    return math.atan2(b1 - b0, a0 - a1)
+
+
+def involute_pair(gearing: Gearing, male_addendum: float, female_addendum: float,
+                  tip_radius: float | None) -> tuple[TwinProfile, TwinProfile]:
+    """Male and female of the involute pump profile (identical rotors), checked for
+    undercuts, loops and interference."""
+    check_identical(gearing, male_addendum, female_addendum, "involute")
+    return rack_pair(gearing, involute_rack(gearing, male_addendum, tip_radius))

@@ -129,8 +129,10 @@ class Events:
     def _gaps(self, ring, cls, k, x, dpsi, orient) -> np.ndarray:
         """Signed distances (len(dpsi), len(x)) of points x of rotor k, each moved
         rigidly by each dpsi with the ring, to the ring's edges not along rotor k."""
-        return np.array([self._gaps_each(ring, cls, k, x, np.full(len(x), d), orient)
-                         for d in dpsi])
+        dpsi = np.asarray(dpsi, dtype=float)
+        flat = self._gaps_each(ring, cls, k, np.tile(x, (len(dpsi), 1)),
+                               np.repeat(dpsi, len(x)), orient)
+        return flat.reshape(len(dpsi), len(x))
 
     def _gaps_each(self, ring, cls, k, x, dpsi, orient) -> np.ndarray:
         """Signed distance of each point x[v] of rotor k, moved rigidly by dpsi[v] with

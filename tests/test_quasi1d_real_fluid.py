@@ -305,7 +305,7 @@ def test_bad_real_fluid_input_exits_2(tmp_path, old, new, word):
 # --- (f) the examples: refrigerants, heat pumps, transcritical CO2 ------------------------------
 
 @pytest.mark.parametrize("name", ["heat_pump_r290", "co2_transcritical", "twin_screw_r134a",
-                                  "twin_screw_co2"])
+                                  "twin_screw_r290", "twin_screw_co2"])
 def test_refrigerant_examples_run_dry_and_deliver_hotter_than_isentropic(tmp_path, name):
     # Each example converges through the command line with closed balances; its suction
     # density is CoolProp's; leakage and port mixing only add entropy, so the delivered
@@ -335,7 +335,7 @@ def test_refrigerant_examples_run_dry_and_deliver_hotter_than_isentropic(tmp_pat
     pc = CP.PropsSI("pcrit", fluid)
     sub = tr["p_Pa"] < pc
     Tsat = np.array([CP.PropsSI("T", "P", p, "Q", 1.0, fluid) for p in tr["p_Pa"][sub]])
-    # measured minimum superheat: the suction's (R290 and twin-screw R134a 5.0 K, both
+    # measured minimum superheat: the suction's (both R290 and twin-screw R134a 5.0 K, both
     # CO2 machines 9.84 K below the critical pressure): leakage and mixing only heat.
     # 1 K below the suction superheat fails a run whose states dip towards the dome.
     assert np.min(tr["T_K"][sub] - Tsat) > Ts - CP.PropsSI("T", "P", ps, "Q", 1.0, fluid) - 1.0

@@ -34,6 +34,10 @@ from rotorflow.errors import RotorflowError
 
 from . import stepping
 
+#: A chamber mass below -NEGATIVE_MASS x (suction density x V_max) at the end of an
+#: implicit solver's segment is a failed integration, not round-off.
+NEGATIVE_MASS = 1e-9
+
 
 class IntegrationError(RotorflowError, RuntimeError):
     """The chamber equations could not be integrated (too stiff, or states left the range)."""
@@ -156,6 +160,11 @@ def _period(model, y0, method, rtol, atol, replay, record, max_steps, h0, stiff_
                            f"{seg.start:.4f} rad, after {run.n_rhs} right-hand sides")
         for kind, k in seg.events:
             model.apply_event(kind, k, seg.start, y)
+            if not np.all(np.isfinite(y)):
+                # (a state the fluid cannot evaluate, e.g. a chamber dying full of
+                # liquid compressed beyond its property table)
+                raise IntegrationError(f"the {kind} of slot {k} at {seg.start:.4f} rad "
+                                       f"left a state that is not finite")
         if record:
             run.trace_theta.append(seg.start)
             run.trace_y.append(y[0].copy())
@@ -330,6 +339,11 @@ def _scipy(model, seg, y, method, rtol, atol, run, record):
     if not sol.success or not np.all(np.isfinite(sol.y[:, -1])):
         raise IntegrationError(f"{method} failed between {seg.start:.4f} and {seg.end:.4f} rad: "
                                f"{sol.message}")
+    # (its trial states may be unphysical, its accepted ones not: a wet pentane pump's
+    # chamber came out at -3 kg)
+    if sol.y[:, -1].reshape(B, S)[:, :model.n].min() < -NEGATIVE_MASS * model.m_ref:
+        raise IntegrationError(f"{method} left a chamber with negative mass between "
+                               f"{seg.start:.4f} and {seg.end:.4f} rad")
     if record:
         for t, yy in zip(sol.t[1:], sol.y.T[1:], strict=True):
             run.trace_theta.append(t)

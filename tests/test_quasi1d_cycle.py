@@ -287,3 +287,23 @@ def test_time_budget_holds_inside_the_first_period(table):
 
     with pytest.raises(OverTime, match=r"max_seconds\) in the first period"):
         simulate(table, _op(), numerics=Numerics(max_seconds=1e-6))
+
+
+def test_an_event_that_leaves_no_finite_state_is_an_error_naming_it(table, monkeypatch):
+    # A dying chamber whose state the fluid cannot evaluate (a wet pentane pump under
+    # scipy's Radau: the chamber died full of liquid at negative mass, its pressure NaN)
+    # went into the next segment as NaN and ended in scipy's traceback ("y0 must be
+    # finite"); now the event that made it is named.
+    from rotorflow.quasi1d import events
+    from rotorflow.quasi1d.integrate import IntegrationError
+
+    def poisoned(model, kind, k, theta, y):
+        real(model, kind, k, theta, y)
+        if kind == "death":
+            y[:, model.nv * model.n:] = np.nan
+
+    real = events.apply_event
+    monkeypatch.setattr(events, "apply_event", poisoned)
+    with pytest.raises(IntegrationError, match=r"the death of slot \d+ at [\d.]+ rad left a "
+                                               r"state that is not finite"):
+        simulate(table, _op())

@@ -307,3 +307,24 @@ def test_an_event_that_leaves_no_finite_state_is_an_error_naming_it(table, monke
     with pytest.raises(IntegrationError, match=r"the death of slot \d+ at [\d.]+ rad left a "
                                                r"state that is not finite"):
         simulate(table, _op())
+
+
+def test_an_implicit_solver_that_ends_at_negative_mass_is_an_error(table, monkeypatch):
+    # scipy's Radau accepted a wet pentane pump's chamber at -3 kg (its trial states are
+    # kept finite, not physical); a segment that ends so is a failed integration, named
+    # at once (not only by the cycle's check of the period's end state).
+    import scipy.integrate
+
+    from rotorflow.quasi1d.integrate import IntegrationError
+
+    real = scipy.integrate.solve_ivp
+
+    def negative(*args, **kw):
+        sol = real(*args, **kw)
+        sol.y[0, -1] = -1e-3  # slot 0's mass, kg (the chamber holds ~3e-5 kg)
+        return sol
+
+    monkeypatch.setattr(scipy.integrate, "solve_ivp", negative)
+    with pytest.raises(IntegrationError, match=r"radau left a chamber with negative mass "
+                                               r"between [\d.]+ and [\d.]+ rad"):
+        simulate(table, _op(), numerics=Numerics(integrator="radau", max_cycles=1))

@@ -228,6 +228,7 @@ def test_a_conjugate_pump_pair_carries_nothing_over(tmp, profile):
     "involute profile ...  The trochoidal profile ... has a small carry over'; the "
     "shipped circular, involute and trochoidal 1-1 pairs are all conjugate and carry "
     "nothing over (<= 1e-7 of V_max each): the seed's profiles, of which it gives no "
-    "dimensions, must leave pockets these do not"))
+    "dimensions, must leave pockets these do not; this measure can pass only on a pair "
+    "that is not conjugate"))
 def test_seed_003_the_circular_carries_more_over_than_the_trochoidal(tmp):
     assert _carry_over("circular", tmp) > 10.0 * max(_carry_over("trochoidal", tmp), 1e-6)

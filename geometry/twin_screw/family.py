@@ -20,8 +20,9 @@
   centres the female tip's circle on the pitch line (circular; for equal lobe counts
   and diameters the one of equal circles, whose rotors are identical) or 0.9 of it
   (line-circle, so that the straight flank exists); on the involute pump rack its tip
-  and root circles' radius (default the addendum: both centred on the pitch line),
-  which sets the flanks' pressure angle;
+  and root circles' radius (default the addendum: both centred on the pitch line; half
+  the largest radius the rack admits where the addendum is not below it), which sets
+  the flanks' pressure angle;
 * ``blow_hole`` (optional): the surface that spans the blow-hole (:mod:`.blowhole`),
   "cusp-plane" (default) or "plane" (seed 004's plane through the contact line's end).
 """
@@ -79,8 +80,9 @@ def _trochoidal(gearing: Gearing, male_addendum: float, female_addendum: float,
 
 PROFILES = {"circular": symmetric_circular_pair, "line-circle": asymmetric_pair,
             "pin-cycloid": _pin_cycloid, "trochoidal": _trochoidal, "involute": involute_pair}
-#: Profiles with no rack tip circle (tip_radius_mm does not apply), or their own default.
-NO_TIP_RADIUS = ("pin-cycloid", "trochoidal", "involute")
+#: Profiles that take no rack tip circle (tip_radius_mm does not apply), or set their
+#: own default for it (the involute's circles).
+OWN_TIP_RADIUS = ("pin-cycloid", "trochoidal", "involute")
 #: A female outer radius this close (per C) to the pitch radius is on it.
 PITCH_TOL = 1e-9
 #: The line-circle rack's default male-tip circle, per the centred one: 10 % smaller
@@ -111,7 +113,7 @@ def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: flo
     if hf < -PITCH_TOL * centre_distance:
         raise CaseError(f"the female diameter {female_diameter * 1e3:.4g} mm is inside its "
                         f"pitch circle ({2e3 * g.r2:.4g} mm)")
-    if tip_radius is None and profile not in NO_TIP_RADIUS:
+    if tip_radius is None and profile not in OWN_TIP_RADIUS:
         tip_radius = centred_tip_radius(g, hm, hf)
         if profile == "line-circle":
             tip_radius *= LINE_CIRCLE_TIP

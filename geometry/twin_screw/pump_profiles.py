@@ -32,12 +32,14 @@ names the circular, trochoidal and involute profiles; it gives no dimensions):
   base circle r cos(alpha), alpha the flank's inclination from the line of centres (the
   pressure angle); the circles round the tips and the roots.  The rack is symmetric
   about its flanks' midpoints on the pitch line, so male and female are one rotor.  The
-  circles' radius fixes alpha, since the four pieces fill one pitch: from the largest
-  radius (no flank left: the circular profile) down to where the flanks lie along the
-  pitch line.  By default the circles are centred on the pitch line (radius = the
-  addendum; cos alpha = 4 h / p, h the addendum and p the rack's pitch), as the
-  circular profile's default centres its circle there.  Rounded
-  tips like the circular's: the seed groups the two ("high carryover").
+  circles' radius fixes alpha, since the four pieces fill one pitch: up to the
+  circular profile's radius (the flank shrinks to nothing) or, on a rack deeper than a
+  quarter of its pitch (many lobes), to p / 4 (the flanks stand on the line of centres,
+  alpha = 0); as the circles shrink to points alpha tends to atan(p / 4 h).  By default
+  the circles are centred on the pitch line (radius = the addendum; cos alpha = 4 h /
+  p, h the addendum and p the rack's pitch), as the circular profile's default centres
+  its circle there.  Rounded tips like the circular's: the seed groups the two ("high
+  carryover").
 """
 
 from __future__ import annotations
@@ -122,30 +124,22 @@ def involute_rack(gearing: Gearing, addendum: float, radius: float | None = None
     """One pitch of the involute pump rack (module docstring), ordered along +b: the
     tip circle (centre a = h - rho), the falling flank, the root circle (a = rho - h),
     the rising flank; h the addendum of both rotors, rho the circles' radius (default
-    h, or half the circular profile's where that is smaller).  The flank's angle alpha
-    from the a axis solves p/2 cos(a) + 2 (rho - h) sin(a)
-    = 2 rho (the pieces fill half a pitch: p/2 - 2 h tan(a) = 2 rho (1 - sin a) / cos a)."""
+    h, or half the largest radius, :func:`_largest_circle`, when h is not below it).
+    The flank's angle alpha from the a axis solves p/2 cos(a) + 2 (rho - h) sin(a) =
+    2 rho (the pieces fill half a pitch: p/2 - 2 h tan(a) = 2 rho (1 - sin a) / cos a),
+    on the root phi + acos(2 rho / norm) (the other makes the flank run backwards)."""
     h, half = addendum, 0.5 * gearing.pitch
-    # The circles alone fill the pitch at the circular profile's radius: there the two
-    # roots alpha = phi +- acos(2 rho / norm) meet, and the flank has no length.
-    widest = identical_tip_radius(gearing, h)
-    if radius is None:  # (many shallow lobes: circles of the addendum would leave none)
-        rho = h if h < widest else 0.5 * widest
-    else:
-        rho = radius
+    largest, why = _largest_circle(gearing, h)
+    rho = (h if h < largest else 0.5 * largest) if radius is None else radius
     if not rho > 0.0:
         raise CaseError(f"tip_radius_mm = {rho * 1e3:.4g}: the involute pump rack's tip and "
                         f"root circles need a positive radius")
-    if not rho < widest:
-        raise CaseError(f"tip_radius_mm = {rho * 1e3:.4g} leaves the involute pump rack no "
-                        f"straight flank: its circles must be smaller than "
-                        f"{widest * 1e3:.4g} mm (the circular profile's)")
+    if not rho < largest:
+        raise CaseError(f"tip_radius_mm = {rho * 1e3:.4g} {why}: the involute pump rack's "
+                        f"circles must be smaller than {largest * 1e3:.4g} mm")
     big = 2.0 * (rho - h)
     norm = math.hypot(half, big)
     alpha = math.atan2(big, half) + math.acos(min(1.0, 2.0 * rho / norm))
-    if not 0.0 < alpha < 0.5 * math.pi:
-        raise CaseError(f"the involute pump rack's circles (tip_radius_mm = {rho * 1e3:.4g}) "
-                        f"leave no flank: its angle would be {math.degrees(alpha):.4g} deg")
     s, c = math.sin(alpha), math.cos(alpha)
     g = 0.5 * math.pi - alpha  # each circle's half span about its apex
     tip = CircleArc("tip circle", (h - rho, 0.0), rho, -g, g)
@@ -154,6 +148,17 @@ def involute_rack(gearing: Gearing, addendum: float, radius: float | None = None
     fall = Line("falling flank", (top, rho * c), (low, half - rho * c))
     rise = Line("rising flank", (low, half + rho * c), (top, 2.0 * half - rho * c))
     return tip, fall, root, rise
+
+
+def _largest_circle(gearing: Gearing, h: float) -> tuple[float, str]:
+    """(the involute rack's largest circle radius, what a larger one does).  The two roots
+    of the angle's equation meet at the circular profile's radius, where the flank has
+    no length; on a rack deeper than a quarter of its pitch the working root reaches
+    alpha = 0 first, at rho = p / 4 (always below the circular's: their difference is
+    (2 h - p / 2)^2 / (8 h))."""
+    if 4.0 * h > gearing.pitch:
+        return 0.25 * gearing.pitch, "tips the flanks past the line of centres"
+    return identical_tip_radius(gearing, h), "leaves no straight flank (the circular profile)"
 
 
 def pressure_angle(rack) -> float:

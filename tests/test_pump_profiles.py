@@ -202,3 +202,34 @@ def test_bad_pump_case_exits_2_naming_the_key(tmp_path):
     assert out.returncode == 2
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "tip_radius_mm" in lines[0]
+
+
+@pytest.mark.parametrize("profile", ["circular", "involute"])
+def test_one_disc_cutter_cuts_both_one_lobe_rotors(profile):
+    """A one-lobe rotor's tooth space runs all the way round, so the disc cutter meets
+    its tips half a lead either side of its root (the contact scan reached a quarter
+    turn: "no contact ... at the tip"; and where it reached, the tip's contact jumped
+    to the other side, the tool profile folded and regenerated the rotor 13 mm off).
+    Each rotor's tool, from its own profile and its own hand of helix, envelopes back
+    onto it within the export tolerance without cutting into it; and the two tools are
+    one (within 1e-9 m; 2e-14 measured), which is what identical rotors promise."""
+    from scipy.spatial import cKDTree
+
+    from rotorflow.geometry.export.cutter import default_setup, form_cutter, round_trip
+    from rotorflow.geometry.sweep import Sweep
+
+    pair = build(profile, 1, 1, C, 0.110, 0.110)
+    sweep = Sweep("helical", 0.2, math.radians(1080.0))
+    tol = 5e-6
+    tools = []
+    for rotor in ("male", "female"):
+        curve = pair.rotor(rotor).profile
+        cut = form_cutter(curve, default_setup(pair, sweep, None, None, rotor), tol)
+        rt = round_trip(curve, cut)
+        assert rt["round_trip_max_m"] < tol and rt["interference_m"] < tol
+        tools.append(cut)
+    male, female = tools
+    assert abs(male.contact[:, 2]).max() > 0.45 * 0.2 / 3  # contacts reach ~half a lead
+    apart = min(cKDTree(np.c_[s * female.axial, female.radius]).query(
+        np.c_[male.axial, male.radius])[0].max() for s in (1.0, -1.0))
+    assert apart < 1e-9

@@ -47,9 +47,9 @@ SCAN = 801
 BISECT = 60
 #: Smallest spacing of written tool points, in tolerances.
 MIN_SPACING = 0.01
-#: Tool angles scanned (rad either side of the plane through both axes) when looking for
-#: interference.
-INTERFERENCE_SPAN = 0.6
+#: Tool angles scanned per radian when looking for interference, either side of the
+#: plane through both axes as far as a tool point can come within the rotor's radius.
+INTERFERENCE_DENSITY = 100
 #: Scan points per profile piece on which a tooth space's root and tips are bracketed
 #: (a multiple of 2, so that the middles and ends of pieces are scan points).
 SPACE_SCAN = 512
@@ -218,6 +218,26 @@ def _nearest_zero(roots, valid):
     return np.where(np.isfinite(score[np.arange(len(roots)), j]), best, np.nan)
 
 
+def _continued_zero(roots, valid, start: int):
+    """Per problem (in profile order), the valid root nearest its neighbour's, walking
+    out from problem ``start`` (its own: the one of smallest |t|), so that the contact
+    runs on along the flank.  (The root of smallest |t| alone jumps where two are
+    nearly as far: a one-lobe rotor's tooth space runs all the way round, and the tool
+    reaches its tips half a lead either side.)"""
+    cand = np.where(valid & np.isfinite(roots), roots, np.nan)
+    out = np.full(len(roots), np.nan)
+    out[start] = _nearest_zero(roots[start:start + 1], valid[start:start + 1])[0]
+    for step in (1, -1):
+        prev = out[start]
+        for i in range(start + step, len(roots) if step > 0 else -1, step):
+            row = cand[i]
+            if np.isfinite(row).any():
+                ref = 0.0 if np.isnan(prev) else prev
+                out[i] = row[np.nanargmin(np.abs(row - ref))]
+                prev = out[i]
+    return out
+
+
 @dataclass(frozen=True)
 class Cutter:
     setup: CutterSetup
@@ -242,7 +262,11 @@ def form_cutter(curve, setup: CutterSetup, tol: float, space=None) -> Cutter:
     o, e = setup.origin, setup.axis
     k = setup.k
     radius = float(np.linalg.norm(p, axis=-1).max())
-    span = radius if k == 0.0 else min(0.5 * math.pi / abs(k), 4.0 * radius)
+    # A profile point meets the tool about where the helix has turned it to face the
+    # tool: within a quarter turn on a many-lobed rotor, up to half a turn at the tips
+    # of a one-lobe rotor's tooth space, which runs all the way round.
+    reach = max(0.5 * math.pi, float(np.abs(np.arctan2(p[:, 1], p[:, 0])).max()) + 0.25 * math.pi)
+    span = radius if k == 0.0 else min(min(reach, math.pi) / abs(k), 4.0 * radius)
 
     def f(z):
         P, Pu, Pz = _helix(p, dp, z, k)
@@ -260,7 +284,7 @@ def form_cutter(curve, setup: CutterSetup, tol: float, space=None) -> Cutter:
         ne = np.cross(n, e)
         lam = -np.sum(np.cross(P - o, e) * ne, -1) / np.maximum(np.sum(ne * ne, -1), 1e-300)
         valid[:, j] = lam > 0.0
-    z = _nearest_zero(roots, valid)
+    z = _continued_zero(roots, valid, int(np.argmin(np.abs(u - root))))
     if np.isnan(z).any():
         i = int(np.nonzero(np.isnan(z))[0][0])
         raise CaseError(
@@ -355,18 +379,23 @@ def round_trip(curve, cutter: Cutter, axial=None, radius=None) -> dict:
             "interference_m": interference(prof, cutter.setup, axial, radius)}
 
 
-def interference(prof, setup: CutterSetup, axial, radius, n_psi: int = 121) -> float:
+def interference(prof, setup: CutterSetup, axial, radius) -> float:
     """Deepest penetration of the tool surface's screw image into the rotor (>= 0)."""
     from matplotlib.path import Path as MplPath
 
     s_nodes, hs, Rs = _meridian(axial, radius)
     s = np.linspace(0.0, s_nodes[-1], 4 * len(s_nodes))
-    psi = np.linspace(-INTERFERENCE_SPAN, INTERFERENCE_SPAN, n_psi)
+    u = sample(prof.curve, 1e-7)
+    poly = prof.point(u)
+    # A tool point at angle psi lies at least C - R cos(psi) from the rotor's axis: the
+    # angles where that exceeds the rotor's radius cannot cut it.
+    reach = (setup.centre_distance - float(np.linalg.norm(poly, axis=-1).max())) \
+        / float(np.max(radius))
+    span = math.acos(min(1.0, max(-1.0, reach))) + 0.05
+    psi = np.linspace(-span, span, max(3, int(2 * span * INTERFERENCE_DENSITY) | 1))
     S, PSI = np.meshgrid(s, psi)
     T, _ = _tool_points(setup, hs(S), Rs(S), PSI)
     q = _to_transverse(T, setup.k).reshape(-1, 2)
-    u = sample(prof.curve, 1e-7)
-    poly = prof.point(u)
     near = np.linalg.norm(q, axis=-1) <= np.linalg.norm(poly, axis=-1).max()
     q = q[near]
     if not len(q):

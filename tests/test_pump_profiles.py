@@ -233,3 +233,23 @@ def test_one_disc_cutter_cuts_both_one_lobe_rotors(profile):
     apart = min(cKDTree(np.c_[s * female.axial, female.radius]).query(
         np.c_[male.axial, male.radius])[0].max() for s in (1.0, -1.0))
     assert apart < 1e-9
+
+
+def test_a_sharp_cornered_pump_is_not_exported_with_a_folded_clearance(tmp_path):
+    """The trochoidal profile's tip corners are sharp: offset by any clearance, the
+    female's profile crosses itself there.  The export says so, naming the clearance,
+    with exit status 2 and nothing written."""
+    case = tmp_path / "pump.toml"
+    case.write_text(
+        '[machine]\ntype = "twin-screw"\nprofile = "trochoidal"\nlobes_male = 1\n'
+        'lobes_female = 1\ncentre_distance_mm = 78\nmale_diameter_mm = 110\n'
+        'female_diameter_mm = 110\nlength_mm = 200\n'
+        '[sweep]\nkind = "helical"\nwrap_male_deg = 1080\n'
+        '[export]\nformats = ["stl"]\nclearance_um = 20\nclearance_on = "female"\n')
+    out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", "export", str(case),
+                          "--out", str(tmp_path / "out")], capture_output=True, text=True)
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1
+    assert "female rotor profile offset by clearance_um = 20 self-intersects" in lines[0]
+    assert not (tmp_path / "out").exists()

@@ -165,8 +165,14 @@ def assemble(case, settings: Export, machine: SweptMachine | None = None) -> Ass
     for r in pair.rotors:
         others = [o.name for o in pair.rotors if o.name != r.name]
         curves[r.name] = _offset(r, clearance, others) if r.name == on else r.profile
-    for curve in curves.values():
-        check_simple(sample_polygon(curve, tol), f"{curve.name} rotor profile")
+    for name, curve in curves.items():
+        what = f"{curve.name} rotor profile"
+        if name == on and max(settings.clearance_m) > 0.0:
+            # (an offset folds where the profile turns sharper than the clearance: at a
+            # sharp corner, such as the trochoidal pump profile's, at any clearance)
+            um = ", ".join(f"{c * 1e6:g}" for c in settings.clearance_m)
+            what += f" offset by clearance_um = {um}"
+        check_simple(sample_polygon(curve, tol), what)
     bores, tip = _bores(pair, settings, curves, tol)
     phi = settings.fluid_angle_rad
     parts = []

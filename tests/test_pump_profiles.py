@@ -20,6 +20,7 @@ from rotorflow.errors import CaseError
 from rotorflow.geometry.twin_screw import Gearing
 from rotorflow.geometry.twin_screw.family import build
 from rotorflow.geometry.twin_screw.pump_profiles import (
+    circle_radius,
     identical_tip_radius,
     involute_rack,
     pressure_angle,
@@ -253,3 +254,32 @@ def test_a_sharp_cornered_pump_is_not_exported_with_a_folded_clearance(tmp_path)
     assert len(lines) == 1
     assert "female rotor profile offset by clearance_um = 20 self-intersects" in lines[0]
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("n, D, deg", [(1, 0.110, 62.0), (1, 0.110, 75.0), (2, 0.100, 60.0),
+                                       (3, 0.100, 50.0), (4, 0.110, 30.0)])
+def test_a_pressure_angle_sets_the_involute_racks_circles(n, D, deg):
+    """pressure_angle_deg gives the circles' radius in closed form, rho = (p/2 - 2 h tan
+    a) cos a / (2 (1 - sin a)); the rack built on it has that angle as the root of its
+    own equation in alpha (1e-12 rad), and the case key builds the same rotors as the
+    radius it stands for."""
+    g = Gearing(C, n, n)
+    h = 0.5 * D - g.r1
+    alpha = math.radians(deg)
+    rho = circle_radius(g, h, alpha)
+    assert pressure_angle(involute_rack(g, h, rho)) == pytest.approx(alpha, abs=1e-12)
+    if n < 4:  # (the 4-4 rack of this depth undercuts: only the rack is checked)
+        by_angle = build("involute", n, n, C, D, D, None, alpha)
+        by_radius = build("involute", n, n, C, D, D, rho)
+        assert by_angle.male.area == by_radius.male.area
+
+
+@pytest.mark.parametrize("profile, tip, deg, word", [
+    ("involute", None, 50.0, r"pressure_angle_deg = 50 is outside .* between 60.7\d* and "
+                             r"75.3\d* deg"),
+    ("involute", 0.016, 70.0, "not both"),
+    ("circular", None, 70.0, "involute profile only"),
+])
+def test_bad_pressure_angles_are_named(profile, tip, deg, word):
+    with pytest.raises(CaseError, match=word):
+        build(profile, 1, 1, C, 0.110, 0.110, tip, math.radians(deg))

@@ -23,6 +23,8 @@
   and root circles' radius (default the addendum: both centred on the pitch line; half
   the largest radius the rack admits where the addendum is not below it), which sets
   the flanks' pressure angle;
+* ``pressure_angle_deg`` (optional, involute only, instead of tip_radius_mm): the
+  flanks' angle from the line of centres, which sets the circles' radius;
 * ``blow_hole`` (optional): the surface that spans the blow-hole (:mod:`.blowhole`),
   "cusp-plane" (default) or "plane" (seed 004's plane through the contact line's end).
 """
@@ -30,6 +32,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 from rotorflow.errors import CaseError
 
@@ -41,6 +44,7 @@ from .pair import TwinScrewPair
 from .pin_cycloid import pin_cycloid_pair
 from .pump_profiles import (
     check_identical,
+    circle_radius,
     identical_pair,
     identical_tip_radius,
     involute_pair,
@@ -48,7 +52,8 @@ from .pump_profiles import (
 )
 
 KEYS = frozenset({"profile", "lobes_male", "lobes_female", "centre_distance_mm",
-                  "male_diameter_mm", "female_diameter_mm", "tip_radius_mm", "blow_hole"})
+                  "male_diameter_mm", "female_diameter_mm", "tip_radius_mm",
+                  "pressure_angle_deg", "blow_hole"})
 #: How the blow-hole is spanned (:mod:`.blowhole`).
 BLOW_HOLES = ("cusp-plane", "plane")
 def _pin_cycloid(gearing: Gearing, male_addendum: float, female_addendum: float,
@@ -99,8 +104,9 @@ def centred_tip_radius(gearing: Gearing, male_addendum: float, female_addendum: 
 
 def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: float,
           male_diameter: float, female_diameter: float,
-          tip_radius: float | None = None) -> TwinScrewPair:
-    """A checked pair (SI lengths)."""
+          tip_radius: float | None = None,
+          pressure_angle: float | None = None) -> TwinScrewPair:
+    """A checked pair (SI lengths; ``pressure_angle`` in rad, the involute's only)."""
     if profile not in PROFILES:
         raise CaseError(f"unknown twin-screw profile {profile!r} "
                         f"(known: {', '.join(sorted(PROFILES))})")
@@ -113,6 +119,14 @@ def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: flo
     if hf < -PITCH_TOL * centre_distance:
         raise CaseError(f"the female diameter {female_diameter * 1e3:.4g} mm is inside its "
                         f"pitch circle ({2e3 * g.r2:.4g} mm)")
+    if pressure_angle is not None:
+        if profile != "involute":
+            raise CaseError(f"pressure_angle_deg applies to the involute profile only, not "
+                            f"to the {profile} profile")
+        if tip_radius is not None:
+            raise CaseError("give tip_radius_mm or pressure_angle_deg, not both: each sets "
+                            "the other on the involute rack")
+        tip_radius = circle_radius(g, hm, pressure_angle)
     if tip_radius is None and profile not in OWN_TIP_RADIUS:
         tip_radius = centred_tip_radius(g, hm, hf)
         if profile == "line-circle":
@@ -145,12 +159,14 @@ def from_section(m: dict, where: str) -> TwinScrewPair:
                         f"({d1 * 500:.4g} + {d2 * 500:.4g} mm) must exceed the centre "
                         f"distance ({c * 1e3:.4g} mm)")
     tip = number(m, "tip_radius_mm", where) * 1e-3 if "tip_radius_mm" in m else None
+    angle = (math.radians(number(m, "pressure_angle_deg", where))
+             if "pressure_angle_deg" in m else None)
     hole = m.get("blow_hole", BLOW_HOLES[0])
     if hole not in BLOW_HOLES:
         raise CaseError(f"blow_hole = {hole!r} in {where} is not one of "
                         f"{', '.join(repr(b) for b in BLOW_HOLES)}")
     try:
-        pair = build(m.get("profile", "circular"), n1, n2, c, d1, d2, tip)
+        pair = build(m.get("profile", "circular"), n1, n2, c, d1, d2, tip, angle)
     except CaseError as e:
         raise CaseError(f"{e} ({where})") from None
     if hole == "plane" and pair.has_lands:

@@ -150,6 +150,22 @@ def involute_rack(gearing: Gearing, addendum: float, radius: float | None = None
     return tip, fall, root, rise
 
 
+def circle_radius(gearing: Gearing, h: float, alpha: float) -> float:
+    """The involute rack's circle radius for the flank angle ``alpha`` (rad): the pitch
+    equation solved for rho, rho = (p/2 - 2 h tan a) cos a / (2 (1 - sin a)); a
+    CaseError naming pressure_angle_deg outside the angles the rack admits."""
+    half = 0.5 * gearing.pitch
+    largest, _ = _largest_circle(gearing, h)
+    big = 2.0 * (largest - h)
+    least = math.atan2(big, half) + math.acos(min(1.0, 2.0 * largest / math.hypot(half, big)))
+    most = math.atan2(half, 2.0 * h)  # the circles shrunk to points
+    if not least < alpha < most:
+        raise CaseError(f"pressure_angle_deg = {math.degrees(alpha):.4g} is outside what the "
+                        f"involute pump rack admits here: between {math.degrees(least):.4g} "
+                        f"and {math.degrees(most):.4g} deg")
+    return (half - 2.0 * h * math.tan(alpha)) * math.cos(alpha) / (2.0 * (1.0 - math.sin(alpha)))
+
+
 def _largest_circle(gearing: Gearing, h: float) -> tuple[float, str]:
     """(the involute rack's largest circle radius, what a larger one does).  The two roots
     of the angle's equation meet at the circular profile's radius, where the flank has

@@ -161,8 +161,8 @@ def _period(model, y0, method, rtol, atol, replay, record, max_steps, h0, stiff_
         for kind, k in seg.events:
             model.apply_event(kind, k, seg.start, y)
             if not np.all(np.isfinite(y)):
-                # (a state the fluid cannot evaluate, e.g. a chamber dying full of
-                # liquid compressed beyond its property table)
+                # (a state the fluid cannot evaluate: a chamber that dies at negative
+                # mass, as scipy's Radau once left a wet pentane pump's, has no pressure)
                 raise IntegrationError(f"the {kind} of slot {k} at {seg.start:.4f} rad "
                                        f"left a state that is not finite")
         if record:

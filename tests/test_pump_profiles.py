@@ -283,3 +283,15 @@ def test_a_pressure_angle_sets_the_involute_racks_circles(n, D, deg):
 def test_bad_pressure_angles_are_named(profile, tip, deg, word):
     with pytest.raises(CaseError, match=word):
         build(profile, 1, 1, C, 0.110, 0.110, tip, math.radians(deg))
+
+
+def test_the_geometry_figures_report_the_racks_flank_angle():
+    """`rotorflow geometry` reports the straight rack flanks' angles: for the involute
+    pair built on pressure_angle_deg = 70 both flanks at 70 deg (the closed-form radius,
+    the rack's root in alpha and the flank line's direction agree to 1e-9 deg); a rack
+    without straight flanks (the circular) reports none."""
+    from rotorflow.geometry.twin_screw.figures import pair_figures
+
+    pair = build("involute", 1, 1, C, 0.110, 0.110, None, math.radians(70.0))
+    assert pair_figures(pair)["rack_flank_angles_deg"] == pytest.approx([70.0, 70.0], abs=1e-9)
+    assert "rack_flank_angles_deg" not in pair_figures(build("circular", 1, 1, C, 0.110, 0.110))

@@ -31,4 +31,20 @@ def pair_figures(pair) -> dict:
         "groove_area_female_mm2": a2 * 1e6,
         "area_utilisation": g.lobes_male * (a1 + a2) / (d1 * d1),
         "cusp_mm": [x * 1e3, y * 1e3],
+        **_flank_angles(pair),
     }
+
+
+def _flank_angles(pair) -> dict:
+    """The straight rack flanks' angles from the line of centres (their pressure angles:
+    each generates an involute of r cos(angle) on both rotors), where the rack has
+    any (the involute pump rack, the line-circle rack)."""
+    from .arcs import Line
+    from .meshing import RackGenerated
+
+    angles = []
+    for piece in pair.male.pieces:
+        if isinstance(piece, RackGenerated) and isinstance(piece.arc, Line):
+            (a0, b0), (a1, b1) = piece.arc.start, piece.arc.end
+            angles.append(math.degrees(math.atan2(abs(b1 - b0), abs(a1 - a0))))
+    return {"rack_flank_angles_deg": angles} if angles else {}

@@ -11,6 +11,7 @@ RESULTS = Path(__file__).resolve().parent / "results"
 MODULES = (
     "bench.bench_geometry",
     "bench.bench_twin_screw",
+    "bench.bench_pump_profiles",
     "bench.bench_quasi1d",
     "bench.bench_pdsim",
     "bench.bench_real_fluid",

@@ -71,6 +71,9 @@ RAY_CHUNK = 128
 RAY_SPAN = 0.05
 #: Margin (rad) of an edge's polar window: rounding only (the edge's own span is added).
 FACING_MARGIN = 1e-6
+#: Share of a slot's nodes with an open cusp cut that must book it for the slot to open
+#: (:func:`build_openings`): all do where the opening is the chamber's, one stray did.
+MAJORITY = 0.5
 
 
 def openings_of(parts, qs):
@@ -275,14 +278,21 @@ def build_openings(pair, psi, per_node, tracks=()) -> tuple[Opening, ...]:
         votes = defaultdict(lambda: defaultdict(int))
         for i, offset in booked[name]:
             votes[int(slot[i])][offset] += 1
-        by_offset = defaultdict(list)
-        for k, counts in votes.items():
-            offset = max(counts, key=counts.get)
-            by_offset[offset].append((events[k], events[k + 1]))
         direction = None
         if pair.blow_hole == "plane":
             direction = _towards_contact(ray.cusp_point(top), tracks)
         table = WidthTable(ray, top, direction)
+        open_ = table(psi) > 0.0
+        by_offset = defaultdict(list)
+        for k, counts in votes.items():
+            # A slot whose nodes with an opening mostly book none is no opening of this
+            # chamber: the node right after a corner crossing can still see the last of
+            # the pocket that just changed hands (the 1-1 trochoidal at 768 nodes per
+            # period booked such a node's whole slot, doubling its blow-hole).
+            if sum(counts.values()) < MAJORITY * np.count_nonzero(open_ & (slot == k)):
+                continue
+            offset = max(counts, key=counts.get)
+            by_offset[offset].append((events[k], events[k + 1]))
         for offset in sorted(by_offset):
             out.append(Opening(name, offset, np.array(sorted(by_offset[offset])), table))
     return tuple(out)

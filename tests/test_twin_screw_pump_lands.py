@@ -193,3 +193,30 @@ def test_the_blow_hole_booking_does_not_depend_on_the_resolution():
     assert set(fine) == set(coarse)
     for key, area in coarse.items():
         assert float(fine[key].max()) == pytest.approx(float(area.max()), rel=1e-9)
+
+
+def test_a_stray_booking_opens_no_slot():
+    """build_openings on bookings made up for the test: a lone node booking a chamber
+    two periods on, in a slot where the cusp line's cut is shut at every node (as the
+    2-2 trochoidal's nodes did at 1536 per period), opens nothing; the same chamber
+    booked by every node where the cut is open opens its slot."""
+    from rotorflow.geometry.twin_screw.blowhole import WidthTable, build_openings
+    from rotorflow.geometry.twin_screw.flank_pocket import PocketRay, corner_crossings
+
+    pair = machine("trochoidal", 1).pair
+    psi = np.linspace(-2.0 * math.pi, 2.0 * math.pi, 1441)
+    top = False
+    width = WidthTable(PocketRay(pair), top, None)(psi)
+    events = np.concatenate([[psi[0]], corner_crossings(pair, psi[0], psi[-1]), [psi[-1]]])
+    slot = np.searchsorted(events, psi, side="right") - 1
+    shut = next(k for k in range(len(events) - 1)
+                if np.any(slot == k) and not np.any(width[slot == k] > 0.0))
+    opened = next(k for k in range(len(events) - 1) if np.any(width[slot == k] > 0.0))
+    per_node = [[] for _ in psi]
+    per_node[int(np.nonzero(slot == shut)[0][0])].append((NAMES[top], 2, 1e-8))
+    for i in np.nonzero((slot == opened) & (width > 0.0))[0]:
+        per_node[i].append((NAMES[top], 1, float(width[i])))
+    out = {(o.name, o.offset): o for o in build_openings(pair, psi, per_node)}
+    assert set(out) == {(NAMES[top], 1)}
+    (a, b), = out[(NAMES[top], 1)].intervals
+    assert (a, b) == (events[opened], events[opened + 1])

@@ -285,11 +285,14 @@ def build_openings(pair, psi, per_node, tracks=()) -> tuple[Opening, ...]:
         open_ = table(psi) > 0.0
         by_offset = defaultdict(list)
         for k, counts in votes.items():
-            # A slot whose nodes with an opening mostly book none is no opening of this
-            # chamber: the node right after a corner crossing can still see the last of
-            # the pocket that just changed hands (the 1-1 trochoidal at 768 nodes per
-            # period booked such a node's whole slot, doubling its blow-hole).
-            if sum(counts.values()) < MAJORITY * np.count_nonzero(open_ & (slot == k)):
+            # A slot whose nodes with an opening mostly book none (or that has none
+            # open) is no opening of this chamber: the node right after a corner
+            # crossing can still see the last of the pocket that just changed hands
+            # (the 1-1 trochoidal at 768 nodes per period booked such a node's whole
+            # slot, doubling its blow-hole; the pin-cycloid 4/6 from 384 gained stray
+            # 0.001 mm2 keys, the 2-2 trochoidal at 1536 empty ones).
+            n_open = np.count_nonzero(open_ & (slot == k))
+            if n_open == 0 or sum(counts.values()) < MAJORITY * n_open:
                 continue
             offset = max(counts, key=counts.get)
             by_offset[offset].append((events[k], events[k + 1]))

@@ -127,6 +127,12 @@ def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: flo
             raise CaseError("give tip_radius_mm or pressure_angle_deg, not both: each sets "
                             "the other on the involute rack")
         tip_radius = circle_radius(g, hm, pressure_angle)
+        try:
+            male, female = PROFILES[profile](g, hm, hf, tip_radius)
+        except CaseError as e:  # (an undercut names the circles: say what set them)
+            raise CaseError(f"pressure_angle_deg = {math.degrees(pressure_angle):.4g} (tip "
+                            f"and root circles of {tip_radius * 1e3:.4g} mm): {e}") from None
+        return TwinScrewPair(g, male, female, profile)
     if tip_radius is None and profile not in OWN_TIP_RADIUS:
         tip_radius = centred_tip_radius(g, hm, hf)
         if profile == "line-circle":

@@ -63,6 +63,10 @@ SAME_EVENT = 1e-9
 #: which it is found: the contact's rate is exact, so three or four steps reach 1e-13.
 NEWTON_STEPS = 30
 CROSSING_XTOL = 1e-13
+#: A contact this near (per C) the cusp line at a node crosses it there: the contact
+#: is found to ~1e-11 m (2.2e-11 on the 1-1 involute at the pitch point, where it
+#: crosses), and at the contacts' speeds (~10 mm/rad) 1e-9 C is ~1e-5 rad of angle.
+AT_NODE = 1e-9
 
 
 def refine(pair, psi: np.ndarray, track):
@@ -199,6 +203,11 @@ def _cusp_line_cut(pair, point, rate, psi_j: float, psi_k: float) -> float:
     lo, hi, f_lo = psi_j, psi_k, point[0] - xc
     if f_lo == 0.0:
         return psi_j
+    # A crossing at the node itself (identical rotors cross the cusp line at the pitch
+    # point, x_c = r1, which a node can hit exactly): rounding puts the contact on
+    # either side of the line there.
+    if abs(c_k[0] - xc) <= AT_NODE * pair.gearing.centre_distance:
+        return psi_k
     if np.sign(f_lo) == np.sign(c_k[0] - xc):
         return np.nan
     x, c, dc = psi_j, point, rate

@@ -34,12 +34,12 @@ import math
 import time
 from pathlib import Path
 
-import numpy as np
-
 from rotorflow.geometry.machine import SweptMachine
 from rotorflow.geometry.sweep import Sweep
 from rotorflow.geometry.twin_screw.blowhole import NAMES
 from rotorflow.geometry.twin_screw.family import build
+
+from .bench_twin_screw import _line_error
 
 PROFILES = ("circular", "involute", "trochoidal")
 RESOLUTIONS = (24, 48, 96)
@@ -56,16 +56,6 @@ def _machine(profile: str, ppp: int):
                if name == NAMES[False])
     _ = m.track_lines
     return time.process_time() - c0, m, v_max, hole
-
-
-def _lines(lines, kind):
-    return sum(x for (name, d), x in lines.items() if name.startswith(kind) and d > 0)
-
-
-def _line_error(m, ref, kind) -> float:
-    here = _lines(m.track_lines, kind)
-    there = _lines(ref.track_lines_at(m.curves.phi), kind)
-    return float(np.abs(here - there).max() / np.abs(there).max())
 
 
 def run(results_dir: Path) -> list[dict]:

@@ -39,7 +39,7 @@ def trochoidal(n, outer_radius):
 
 
 @functools.cache
-def circular(n, diameter, profile="circular"):
+def rack_pump(n, diameter, profile="circular"):
     pair = build(profile, n, n, C, diameter, diameter)
     return pair.gearing, pair.male, pair.female
 
@@ -48,11 +48,11 @@ PAIRS = {"trochoidal 1-1": lambda: trochoidal(1, 0.055),
          "trochoidal 1-1 deep": lambda: trochoidal(1, 0.066),
          "trochoidal 2-2": lambda: trochoidal(2, 0.050),
          "trochoidal 3-3": lambda: trochoidal(3, 0.048),
-         "circular 1-1": lambda: circular(1, 0.100),
-         "circular 2-2": lambda: circular(2, 0.100),
-         "involute 1-1": lambda: circular(1, 0.110, "involute"),
-         "involute 2-2": lambda: circular(2, 0.100, "involute"),
-         "involute 3-3": lambda: circular(3, 0.100, "involute")}
+         "circular 1-1": lambda: rack_pump(1, 0.100),
+         "circular 2-2": lambda: rack_pump(2, 0.100),
+         "involute 1-1": lambda: rack_pump(1, 0.110, "involute"),
+         "involute 2-2": lambda: rack_pump(2, 0.100, "involute"),
+         "involute 3-3": lambda: rack_pump(3, 0.100, "involute")}
 
 
 @pytest.fixture(scope="module", params=sorted(PAIRS))
@@ -123,7 +123,7 @@ def test_involute_flanks_are_involutes_of_the_base_circle(n, D):
     beta = r_b / radius) is constant, for one hand or the other (1e-9 rad; a circle
     through the same end points would break it by degrees).  By default (rack circles
     centred on the pitch line) cos(alpha) = 4 h / p, h the addendum, p the pitch."""
-    g, male, female = circular(n, D, "involute")
+    g, male, female = rack_pump(n, D, "involute")
     h = 0.5 * D - g.r1
     alpha = pressure_angle(involute_rack(g, h))
     assert math.cos(alpha) == pytest.approx(4 * h / g.pitch, rel=1e-12)

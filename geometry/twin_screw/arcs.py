@@ -13,6 +13,7 @@ has a ``name`` so that an error in what it generates can say which arc it was.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,6 +32,12 @@ class Line:
     name: str
     start: tuple[float, float]
     end: tuple[float, float]
+
+    def inclination(self) -> float:
+        """Its angle from the a axis (the line of centres), in [0, pi/2]: a rack
+        flank's pressure angle (it generates involutes of r cos of it)."""
+        (a0, b0), (a1, b1) = self.start, self.end
+        return math.atan2(abs(b1 - b0), abs(a1 - a0))
 
     def eval(self, t, order: int = 0):
         t = np.asarray(t, dtype=float)

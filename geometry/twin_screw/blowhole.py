@@ -237,19 +237,29 @@ class WidthTable:
 
 def tip_crossings(pair, a: float, b: float, top: bool) -> np.ndarray:
     """Male angles in [a, b] where a tip of either rotor crosses the top (or bottom)
-    cusp.  A tip's angle is linear in the male angle (the male turns +1, the female
+    cusp."""
+    return np.sort(cusp_crossings(pair, a, b, {r: [pair.tip_angle(r)] for r in (MALE, FEMALE)},
+                                  (top,)))
+
+
+def cusp_crossings(pair, a: float, b: float, angles: dict, tops) -> np.ndarray:
+    """Male angles in [a, b] where a point of a rotor at one of its polar angles
+    ``angles[rotor]`` (rotor frame) crosses a cusp (``tops``: True the top one).  A
+    rotor point's angle is linear in the male angle (the male turns +1, the female
     -N1/N2), so its crossings repeat every lobe period."""
     g = pair.gearing
     xc, yc = pair.cusp
-    yc = yc if top else -yc
     period = TWO_PI / g.lobes_male
     ratio = g.lobes_male / g.lobes_female
     out = []
     for rotor, axis_x, rate in ((MALE, 0.0, 1.0), (FEMALE, g.centre_distance, -ratio)):
-        c = (math.atan2(yc, xc - axis_x) - pair.tip_angle(rotor)) / rate
-        first = c + period * math.ceil((a - c) / period)
-        out.extend(np.arange(first, b, period))
-    return np.sort(np.array(out))
+        for top in tops:
+            seen = math.atan2(yc if top else -yc, xc - axis_x)
+            for angle in angles[rotor]:
+                c = (seen - angle) / rate
+                first = c + period * math.ceil((a - c) / period)
+                out.extend(np.arange(first, b, period))
+    return np.array(out)
 
 
 def build_openings(pair, psi, per_node, tracks=()) -> tuple[Opening, ...]:

@@ -127,20 +127,21 @@ def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: flo
             raise CaseError("give tip_radius_mm or pressure_angle_deg, not both: each sets "
                             "the other on the involute rack")
         tip_radius = circle_radius(g, hm, pressure_angle)
-        try:
-            male, female = PROFILES[profile](g, hm, hf, tip_radius)
-        except CaseError as e:  # (an undercut names the circles: say what set them)
-            raise CaseError(f"pressure_angle_deg = {math.degrees(pressure_angle):.4g} (tip "
-                            f"and root circles of {tip_radius * 1e3:.4g} mm): {e}") from None
-        return TwinScrewPair(g, male, female, profile)
-    if tip_radius is None and profile not in OWN_TIP_RADIUS:
+    elif tip_radius is None and profile not in OWN_TIP_RADIUS:
         tip_radius = centred_tip_radius(g, hm, hf)
         if profile == "line-circle":
             tip_radius *= LINE_CIRCLE_TIP
         elif identical_pair(g, hm, hf):
             # N-N with equal diameters: the rack whose male and female are one rotor
             tip_radius = identical_tip_radius(g, hm)
-    male, female = PROFILES[profile](g, hm, hf, tip_radius)
+    try:
+        male, female = PROFILES[profile](g, hm, hf, tip_radius)
+    except CaseError as e:
+        if pressure_angle is None:
+            raise
+        # (an undercut names the circles: say what set them)
+        raise CaseError(f"pressure_angle_deg = {math.degrees(pressure_angle):.4g} (tip and "
+                        f"root circles of {tip_radius * 1e3:.4g} mm): {e}") from None
     return TwinScrewPair(g, male, female, profile)
 
 

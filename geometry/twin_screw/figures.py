@@ -42,9 +42,6 @@ def _flank_angles(pair) -> dict:
     from .arcs import Line
     from .meshing import RackGenerated
 
-    angles = []
-    for piece in pair.male.pieces:
-        if isinstance(piece, RackGenerated) and isinstance(piece.arc, Line):
-            (a0, b0), (a1, b1) = piece.arc.start, piece.arc.end
-            angles.append(math.degrees(math.atan2(abs(b1 - b0), abs(a1 - a0))))
+    angles = [math.degrees(piece.arc.inclination()) for piece in pair.male.pieces
+              if isinstance(piece, RackGenerated) and isinstance(piece.arc, Line)]
     return {"rack_flank_angles_deg": angles} if angles else {}

@@ -24,8 +24,7 @@ import math
 
 import numpy as np
 
-from ..planar import TWO_PI
-from .blowhole import CuspRay
+from .blowhole import CuspRay, cusp_crossings
 from .boundaries import CUSP_POINT
 from .regions import FEMALE, MALE
 
@@ -91,18 +90,8 @@ def corner_crossings(pair, a: float, b: float) -> np.ndarray:
     """Male angles in [a, b] at which a land corner of either rotor crosses either
     cusp (:func:`.blowhole.tip_crossings` with corners for tips, both cusps: a pocket
     is born at one and dies at the other)."""
-    g = pair.gearing
-    xc, yc = pair.cusp
-    period = TWO_PI / g.lobes_male
-    ratio = g.lobes_male / g.lobes_female
-    out = []
-    for rotor, axis_x, rate in ((MALE, 0.0, 1.0), (FEMALE, g.centre_distance, -ratio)):
-        profile = pair.male if rotor == MALE else pair.female
+    angles = {}
+    for rotor, profile in ((MALE, pair.male), (FEMALE, pair.female)):
         corners = pair.corner_points(profile)[:2]  # lobe 0's: the others repeat them
-        for cy in (yc, -yc):
-            seen = math.atan2(cy, xc - axis_x)
-            for p in corners:
-                c = (seen - math.atan2(p[1], p[0])) / rate
-                first = c + period * math.ceil((a - c) / period)
-                out.extend(np.arange(first, b, period))
-    return np.unique(np.array(out))
+        angles[rotor] = [math.atan2(p[1], p[0]) for p in corners]
+    return np.unique(cusp_crossings(pair, a, b, angles, (True, False)))

@@ -124,12 +124,12 @@ def involute_rack(gearing: Gearing, addendum: float, radius: float | None = None
     """One pitch of the involute pump rack (module docstring), ordered along +b: the
     tip circle (centre a = h - rho), the falling flank, the root circle (a = rho - h),
     the rising flank; h the addendum of both rotors, rho the circles' radius (default
-    h, or half the largest radius, :func:`_largest_circle`, when h is not below it).
+    h, or half the largest radius, :func:`largest_circle`, when h is not below it).
     The flank's angle alpha from the a axis solves p/2 cos(a) + 2 (rho - h) sin(a) =
     2 rho (the pieces fill half a pitch: p/2 - 2 h tan(a) = 2 rho (1 - sin a) / cos a),
     on the root phi + acos(2 rho / norm) (the other makes the flank run backwards)."""
     h, half = addendum, 0.5 * gearing.pitch
-    largest, why = _largest_circle(gearing, h)
+    largest, why = largest_circle(gearing, h)
     rho = (h if h < largest else 0.5 * largest) if radius is None else radius
     if not rho > 0.0:
         raise CaseError(f"tip_radius_mm = {rho * 1e3:.4g}: the involute pump rack's tip and "
@@ -137,9 +137,7 @@ def involute_rack(gearing: Gearing, addendum: float, radius: float | None = None
     if not rho < largest:
         raise CaseError(f"tip_radius_mm = {rho * 1e3:.4g} {why}: the involute pump rack's "
                         f"circles must be smaller than {largest * 1e3:.4g} mm")
-    big = 2.0 * (rho - h)
-    norm = math.hypot(half, big)
-    alpha = math.atan2(big, half) + math.acos(min(1.0, 2.0 * rho / norm))
+    alpha = _flank_angle(gearing, h, rho)
     s, c = math.sin(alpha), math.cos(alpha)
     g = 0.5 * math.pi - alpha  # each circle's half span about its apex
     tip = CircleArc("tip circle", (h - rho, 0.0), rho, -g, g)
@@ -155,9 +153,7 @@ def circle_radius(gearing: Gearing, h: float, alpha: float) -> float:
     equation solved for rho, rho = (p/2 - 2 h tan a) cos a / (2 (1 - sin a)); a
     CaseError naming pressure_angle_deg outside the angles the rack admits."""
     half = 0.5 * gearing.pitch
-    largest, _ = _largest_circle(gearing, h)
-    big = 2.0 * (largest - h)
-    least = math.atan2(big, half) + math.acos(min(1.0, 2.0 * largest / math.hypot(half, big)))
+    least = _flank_angle(gearing, h, largest_circle(gearing, h)[0])
     most = math.atan2(half, 2.0 * h)  # the circles shrunk to points
     if not least < alpha < most:
         raise CaseError(f"pressure_angle_deg = {math.degrees(alpha):.4g} is outside what the "
@@ -166,7 +162,14 @@ def circle_radius(gearing: Gearing, h: float, alpha: float) -> float:
     return (half - 2.0 * h * math.tan(alpha)) * math.cos(alpha) / (2.0 * (1.0 - math.sin(alpha)))
 
 
-def _largest_circle(gearing: Gearing, h: float) -> tuple[float, str]:
+def _flank_angle(gearing: Gearing, h: float, rho: float) -> float:
+    """The flank's angle alpha from the a axis for circles of radius rho: the root
+    phi + acos(2 rho / norm) of p/2 cos(a) + 2 (rho - h) sin(a) = 2 rho."""
+    half, big = 0.5 * gearing.pitch, 2.0 * (rho - h)
+    return math.atan2(big, half) + math.acos(min(1.0, 2.0 * rho / math.hypot(half, big)))
+
+
+def largest_circle(gearing: Gearing, h: float) -> tuple[float, str]:
     """(the involute rack's largest circle radius, what a larger one does).  The two roots
     of the angle's equation meet at the circular profile's radius, where the flank has
     no length; on a rack deeper than a quarter of its pitch the working root reaches
@@ -179,9 +182,7 @@ def _largest_circle(gearing: Gearing, h: float) -> tuple[float, str]:
 
 def pressure_angle(rack) -> float:
     """The involute rack's flank angle from the line of centres (its pressure angle)."""
-    fall = rack[1]
-    (a0, b0), (a1, b1) = fall.start, fall.end
-    return math.atan2(b1 - b0, a0 - a1)
+    return rack[1].inclination()
 
 
 def involute_pair(gearing: Gearing, male_addendum: float, female_addendum: float,

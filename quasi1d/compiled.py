@@ -95,11 +95,12 @@ def _entries():
 
 
 def _helpers():
-    from . import chamber, coolprop_fluid, dry_air, flows, kernel, stepping
+    from . import chamber, coolprop_bubble, coolprop_fluid, dry_air, flows, kernel, stepping
 
     return (flows._x_eff, flows.nozzle_critical_ratio, flows._psi, flows.nozzle_constants,
             flows.nozzle_f_c, flows.fanno_f, dry_air.table_interp, dry_air._lerp,
-            coolprop_fluid.table_cell, coolprop_fluid.table_row, kernel.fluid_state,
+            coolprop_fluid.table_cell, coolprop_fluid.table_row, coolprop_fluid.table_state,
+            coolprop_bubble.liquid_state, kernel.fluid_state,
             kernel.ideal_flow, kernel._add, kernel._node, chamber.spline_at,
             stepping.err_norm, stepping.rk_step, stepping._grow, stepping.segment,
             stepping.ros23_step, stepping.jacobian, stepping._w_solve, kernel.rhs_segment,
@@ -107,10 +108,11 @@ def _helpers():
 
 
 def _inlined():
-    from . import coolprop_fluid, dry_air, kernel
+    from . import coolprop_bubble, coolprop_fluid, dry_air, kernel
 
     return (kernel._add, kernel._node, kernel.fluid_state, dry_air.table_interp,
-            dry_air._lerp, coolprop_fluid.table_row)
+            dry_air._lerp, coolprop_fluid.table_row, coolprop_fluid.table_state,
+            coolprop_bubble.liquid_state)
 
 
 def _select(cond, a, b):

@@ -18,7 +18,10 @@ of p: p is off by up to 1.2e-3 and T by 2.1e-3 there, and the derivatives, which
 the line, are a blend of their two sides: kappa off by up to 1.2 %, (dp/drho)_u 2 %,
 (dp/du)_rho 35 % (it falls ~20 % into the dome).  kappa moves a nozzle flux by a tenth of
 its error; the derivatives serve only the ideal-port constraint, whose drift correction
-removes the pressure offset a wrong derivative leaves.
+removes the pressure offset a wrong derivative leaves.  (The slopes of the interpolated p
+in those cells instead, tried: a CO2 point's cycle needed twice the periods, the
+derivatives then jumping at every cell edge.)  That is the dew line; the bubble line,
+where a liquid meets the wet mixture, is carried apart (:mod:`.coolprop_bubble`).
 """
 
 from __future__ import annotations
@@ -31,7 +34,9 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from .coolprop_table import build_nodes, dew_temperature, reachable_box, suction_state
+from . import coolprop_bubble
+from .coolprop_table import _state, build_nodes, dew_temperature, reachable_box, suction_state
+from .flows import select
 
 # Grid of the property table: 200 x 200 nodes in (ln rho, u); builds in ~1 s.  The
 # interpolation error (module docstring) is set by the cells the saturation line crosses;
@@ -50,7 +55,9 @@ class TabulatedFluid:
     du: float
     nx: int
     nu: int
-    table: np.ndarray = field(repr=False)  # (5, nx*nu): ln p, T, kappa, dp/drho|u, dp/du|rho
+    # (10, nx*nu): ln p, T, kappa, dp/drho|u, dp/du|rho at the nodes; the bubble line at
+    # the u nodes (the first nu entries of rows 5-9, :mod:`.coolprop_bubble`)
+    table: np.ndarray = field(repr=False)
     # (nx-1, nu-1): cells whose four nodes CoolProp could evaluate
     cells: np.ndarray = field(repr=False)
 
@@ -59,28 +66,31 @@ class TabulatedFluid:
               nodes: int = TABLE_NODES) -> TabulatedFluid:
         x = np.linspace(math.log(rho_lo), math.log(rho_hi), nodes)
         ug = np.linspace(u_lo, u_hi, nodes)
-        tab = build_nodes(name, x, ug)
+        tab, dome = build_nodes(name, x, ug)
         ok = np.all(np.isfinite(tab), axis=0)
         cells = ok[:-1, :-1] & ok[1:, :-1] & ok[:-1, 1:] & ok[1:, 1:]
+        bubble = coolprop_bubble.bubble_line(_state(name), ug)
+        coolprop_bubble.continue_wet_side(tab, dome, x, bubble[0])
+        table = np.zeros((5 + coolprop_bubble.ROWS, nodes * nodes))
+        table[:5] = tab.reshape(5, -1)
+        table[5:, :nodes] = bubble
         return cls(name, float(x[0]), float(x[1] - x[0]), float(ug[0]),
-                   float(ug[1] - ug[0]), nodes, nodes, tab.reshape(5, -1), cells)
-
-    def _interp(self, rho, u, rows):
-        return table_interp(np.asarray(rho, dtype=float), np.asarray(u, dtype=float),
-                            self.x0, self.dx, self.u0, self.du, self.nu, self.table,
-                            rows.start, rows.stop)
+                   float(ug[1] - ug[0]), nodes, nodes, table, cells)
 
     def kernel_params(self):
         """(kind, parameters, table) of the compiled right-hand side (:mod:`.kernel`)."""
         return 2, np.array([self.x0, self.dx, self.u0, self.du, float(self.nu)]), self.table
 
+    def state(self, rho, u):
+        """p, T, kappa, (dp/drho)_u, (dp/du)_rho at rho, u (:func:`table_state`)."""
+        return table_state(np.asarray(rho, dtype=float), np.asarray(u, dtype=float),
+                           self.x0, self.dx, self.u0, self.du, self.nu, self.table)
+
     def props(self, rho, u):
-        v = self._interp(rho, u, slice(0, 3))
-        return np.exp(v[0]), v[1], v[2]
+        return self.state(rho, u)[:3]
 
     def dp(self, rho, u):
-        v = self._interp(rho, u, slice(3, 5))
-        return v[0], v[1]
+        return self.state(rho, u)[3:]
 
     def in_range(self, rho, u) -> bool:
         """Every state inside the table and in a cell CoolProp could evaluate."""
@@ -186,14 +196,18 @@ class TabulatedFluid:
         return (st.hmass() - h1) - T1 * (st.smass() - s1)
 
 
-def table_interp(rho, u, x0, dx, u0, du, nu, table, r0, r1):
-    """Rows r0..r1-1 of the table (ln p, T, kappa, dp/drho|u, dp/du|rho) interpolated
-    bilinearly in (ln rho, u) at arrays rho, u: (r1 - r0, *rho.shape)."""
+def table_state(rho, u, x0, dx, u0, du, nu, table):
+    """p, T, kappa, (dp/drho)_u, (dp/du)_rho at arrays or scalars rho, u: the liquid's
+    law denser than the bubble line (:mod:`.coolprop_bubble`), else the table bilinearly
+    (the nodes' pressure derivatives interpolated too)."""
     k, tx, tu = table_cell(rho, u, x0, dx, u0, du, nu, table.shape[1] // nu)
-    out = np.empty((r1 - r0,) + np.shape(rho))
-    for r in range(r0, r1):
-        out[r - r0] = table_row(table, r, k, tx, tu, nu)
-    return out
+    rb, pl, Tl, kl, prl, pul = coolprop_bubble.liquid_state(table, k % nu, tu, rho, du)
+    liquid = rho >= rb
+    return (select(liquid, pl, np.exp(table_row(table, 0, k, tx, tu, nu))),
+            select(liquid, Tl, table_row(table, 1, k, tx, tu, nu)),
+            select(liquid, kl, table_row(table, 2, k, tx, tu, nu)),
+            select(liquid, prl, table_row(table, 3, k, tx, tu, nu)),
+            select(liquid, pul, table_row(table, 4, k, tx, tu, nu)))
 
 
 def table_cell(rho, u, x0, dx, u0, du, nu, nx):

@@ -126,15 +126,17 @@ def reachable_box(name, ps, pd, Ts, qs, Tw, To, vr):
     return rho_lo, rho_hi, u_lo, u_hi
 
 
-def build_nodes(name: str, x: np.ndarray, ug: np.ndarray) -> np.ndarray:
-    """The table (5, nx, nu) on ln rho = x and u = ug; NaN where CoolProp cannot
-    evaluate (below the triple point, beyond the equation of state)."""
+def build_nodes(name: str, x: np.ndarray, ug: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The table (5, nx, nu) on ln rho = x and u = ug, NaN where CoolProp cannot evaluate
+    (below the triple point, beyond the equation of state); and which nodes lie inside
+    the dome (nx, nu)."""
     import CoolProp.CoolProp as CP
 
     st = _state(name)
     two = CP.iphase_twophase
     du_fd = FD_STEP * (ug[-1] - ug[0])
     tab = np.full((5, x.size, ug.size), np.nan)
+    dome = np.zeros((x.size, ug.size), dtype=bool)
 
     def p_at(r, u):
         st.update(CP.DmassUmass_INPUTS, r, u)
@@ -145,7 +147,8 @@ def build_nodes(name: str, x: np.ndarray, ug: np.ndarray) -> np.ndarray:
             try:
                 st.update(CP.DmassUmass_INPUTS, rho, u)
                 p, T = st.p(), st.T()
-                if st.phase() != two:
+                dome[i, j] = st.phase() == two
+                if not dome[i, j]:
                     pr = st.first_partial_deriv(CP.iP, CP.iDmass, CP.iUmass)
                     pu = st.first_partial_deriv(CP.iP, CP.iUmass, CP.iDmass)
                 else:
@@ -155,7 +158,7 @@ def build_nodes(name: str, x: np.ndarray, ug: np.ndarray) -> np.ndarray:
                 continue
             a2 = pr + p / (rho * rho) * pu
             tab[:, i, j] = (math.log(p), T, rho * a2 / p, pr, pu) if p > 0 and a2 > 0 else np.nan
-    return tab
+    return tab, dome
 
 
 def _quotient(p0, p_at, rho, u, dr, du):

@@ -26,7 +26,7 @@ import numpy as np
 
 from . import flows, stepping
 from .chamber import spline_at
-from .coolprop_fluid import table_cell, table_row
+from .coolprop_fluid import table_state
 from .dry_air import table_interp as table_1d
 
 # Fluid kinds of fluid_state (the fluids' kernel_params)
@@ -46,10 +46,7 @@ def fluid_state(kind, par, tab, rho, u):
         R = par[2]
         return R * rho * T, T, kap, R * T, R * rho * icv
     nu = int(par[4])
-    k, tx, tu = table_cell(rho, u, par[0], par[1], par[2], par[3], nu, tab.shape[1] // nu)
-    return (np.exp(table_row(tab, 0, k, tx, tu, nu)), table_row(tab, 1, k, tx, tu, nu),
-            table_row(tab, 2, k, tx, tu, nu), table_row(tab, 3, k, tx, tu, nu),
-            table_row(tab, 4, k, tx, tu, nu))
+    return table_state(rho, u, par[0], par[1], par[2], par[3], nu, tab)
 
 
 def nodes(x, suction, discharge):

@@ -390,3 +390,137 @@ def test_a_low_quality_suction_starts_from_states_the_fluid_has(machine):
     assert np.all((p[live] > 0.99 * 3e5) & (p[live] < 1.01 * 9e5))
     rho_liquid = CP.PropsSI("Dmass", "P", 9e5, "Q", 0.0, "R134a")
     assert np.all(m[live] / V[live] < rho_liquid)
+
+
+# --- (e) the bubble line: chambers that condense to liquid ------------------------------------
+
+def _pentane_op(q):
+    # n-pentane pumped wet from 1 to 4 bar (suction at its saturation temperature): below
+    # quality ~0.3 the isentrope from suction ends as subcooled liquid at 4 bar, so the
+    # discharging chambers condense and sit on the bubble line at the plenum pressure
+    Tsat = CP.PropsSI("T", "P", 1e5, "Q", q, "n-Pentane")
+    return Operating.from_section({
+        "p_suction_bar": 1.0, "p_discharge_bar": 4.0, "T_suction_K": round(Tsat, 2),
+        "speed_rpm": 3000.0, "volume_ratio": 2.0, "fluid": "CoolProp::n-Pentane",
+        "suction_quality": q}, "test")
+
+
+def _pentane_table():
+    Tsat = round(CP.PropsSI("T", "P", 1e5, "Q", 0.2, "n-Pentane"), 2)
+    return tabulated("n-Pentane", 1e5, 4e5, Tsat, Tsat, Tsat, 2.0, 0.2)
+
+
+def test_table_against_the_flash_on_both_sides_of_the_bubble_line():
+    # A liquid's p rises ~1e4 x faster with density than a wet mixture's; one cell 5 % wide
+    # in density cannot hold both, and the cells the bubble line cut were off by a median
+    # 8 % and up to 7 x (the wet side's cells now 1.8e-4).  The saturated liquid at 1-12
+    # bar, expanded into the dome by up to 5 % of its density and compressed by up to
+    # 0.3 % (to 15 x its pressure), against CoolProp's (rho, u) flash.  Measured: wet
+    # p 1.8e-4, T 2.3e-5; liquid p 1.3e-2 (the linear law's curvature), T 1.8e-6.
+    f = _pentane_table()
+    st = CP.AbstractState("HEOS", "n-Pentane")
+    rng = np.random.default_rng(3)
+    T_lo, T_hi = (CP.PropsSI("T", "P", p, "Q", 0, "n-Pentane") for p in (1e5, 12e5))
+    err = {"wet": [], "liquid": []}
+    for t in rng.uniform(T_lo, T_hi, 200):
+        st.update(CP.QT_INPUTS, 0.0, t)
+        rb, ub = st.rhomass(), st.umass()
+        for side, s in (("wet", rng.uniform(-0.05, 0.0)), ("liquid", rng.uniform(0.0, 3e-3))):
+            st.update(CP.DmassUmass_INPUTS, rb * (1 + s), ub)
+            p, T, _ = f.props(np.array([rb * (1 + s)]), np.array([ub]))
+            err[side].append((p[0] / st.p() - 1, T[0] / st.T() - 1))
+    e = {k: np.abs(np.array(v)).max(axis=0) for k, v in err.items()}
+    assert e["wet"][0] < 5e-4 and e["wet"][1] < 1e-4
+    assert e["liquid"][0] < 2.5e-2 and e["liquid"][1] < 1e-5
+    # a chamber held at 4 bar on the bubble line holds the saturated liquid's density
+    # (the cell's edge, 2 % lighter, before)
+    st.update(CP.PQ_INPUTS, 4e5, 0.0)
+    rb, ub = st.rhomass(), st.umass()
+    rho = rb * np.linspace(0.999, 1.001, 2001)
+    p = f.props(rho, np.full_like(rho, ub))[0]
+    assert rho[np.argmin(np.abs(p - 4e5))] == pytest.approx(rb, rel=1e-4)
+
+
+def test_liquid_derivatives_are_those_of_its_pressure_and_the_kernel_agrees():
+    # The ideal ports hold a chamber at the plenum's pressure by (dp/drho)_u and
+    # (dp/du)_rho; on the liquid side they are the linear law's own (a blend of the cell's
+    # nodes was ~100 x off there and a discharging chamber chattered at steps of 1e-8
+    # rad).  Checked against difference quotients of the p it returns, at 200 liquid
+    # states up to 0.3 % denser than the bubble line at their u.
+    from rotorflow.quasi1d.coolprop_bubble import NO_LIQUID, ROW_RHO
+    from rotorflow.quasi1d.kernel import TABLE_2D, fluid_state
+
+    f = _pentane_table()
+    rng = np.random.default_rng(2)
+    rb_nodes = f.table[ROW_RHO, :f.nu]
+    j = rng.choice(np.nonzero((rb_nodes[:-1] < NO_LIQUID) & (rb_nodes[1:] < NO_LIQUID))[0],
+                   200)
+    t = rng.uniform(0.2, 0.8, 200)
+    rho = (rb_nodes[j] + t * (rb_nodes[j + 1] - rb_nodes[j])) * (1 + rng.uniform(1e-5, 3e-3, 200))
+    u = f.u0 + (j + t) * f.du
+    pr, pu = f.dp(rho, u)
+    hr, hu = 1e-8 * rho, 1e-7 * f.du
+    qr = (f.props(rho + hr, u)[0] - f.props(rho - hr, u)[0]) / (2 * hr)
+    qu = (f.props(rho, u + hu)[0] - f.props(rho, u - hu)[0]) / (2 * hu)
+    assert np.max(np.abs(pr / qr - 1)) < 1e-5 and np.max(np.abs(pu / qu - 1)) < 1e-5
+    # the chamber kernel's evaluation is the same function, on both sides of the line
+    kind, par, tab = f.kernel_params()
+    assert kind == TABLE_2D
+    rho = np.concatenate([rho, rho * 0.97])
+    u = np.concatenate([u, u])
+    for a, b in zip(fluid_state(kind, par, tab, rho, u), f.state(rho, u), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("q", [0.3, 0.1])
+def test_wet_pumping_through_the_bubble_line_converges_and_conserves(q):
+    # Before the table carried the bubble line: quality 0.3 ended in step-size underflow
+    # at 0.21 rad, 0.1 at the 60-s budget in the first period; now 3-4 s.
+    from rotorflow.quasi1d.synthetic import sin2_table
+
+    res = simulate(sin2_table(rows=721), _pentane_op(q), Leakage(gap_m=20e-6, model="nozzle"),
+                   numerics=Numerics(max_seconds=30))
+    fig = res.figures
+    assert fig["converged"], fig.get("message")
+    assert fig["mass_balance_error"] < 1e-6 and fig["energy_balance_error"] < 1e-6
+    assert res.solution.conservation_mass < 1e-11
+    assert res.solution.conservation_energy < 1e-11
+    # the second law: no less work than the isentropic compression of what is delivered
+    s1 = CP.PropsSI("S", "P", 1e5, "Q", q, "n-Pentane")
+    w_s = CP.PropsSI("H", "P", 4e5, "S", s1, "n-Pentane") - CP.PropsSI("H", "P", 1e5, "Q", q,
+                                                                      "n-Pentane")
+    assert fig["indicated_power_W"] > w_s * fig["mass_flow_kg_s"]
+    # the discharging chambers have condensed to subcooled liquid (the isentrope ends
+    # 1 K below saturation at quality 0.3, 32 K at 0.1): their density is CoolProp's at
+    # their traced p and T (the wet suction's is below a tenth of it)
+    m = res.machine
+    dis = np.isfinite(m["p_Pa"]) & (m["p_Pa"] > 0.999 * 4e5)
+    dis &= m["T_K"] < CP.PropsSI("T", "P", 4e5, "Q", 0, "n-Pentane") - 0.1
+    rho = (m["m_kg"] / m["volume_m3"])[dis]
+    flash = CP.PropsSI("Dmass", "P", m["p_Pa"][dis], "T", m["T_K"][dis], "n-Pentane")
+    assert rho.size > 10
+    np.testing.assert_allclose(rho, flash, rtol=1e-4)
+
+
+def test_auto_integrator_leaves_the_rosenbrock_method_when_it_needs_more_steps(monkeypatch):
+    # A wet pentane chamber discharging on the bubble line, where the pressure's slope in
+    # density jumps ~1e4-fold: ros23's Jacobian by finite differences straddles the kink,
+    # and it needs 4453 steps for the period dopri5 does in 70.  With dopri5 made to give
+    # up at 50 steps, "auto" tries ros23, which past AUTO_ROS23_STEPS hands the period back
+    # to dopri5 with the whole budget.
+    from rotorflow.quasi1d import integrate
+    from rotorflow.quasi1d.simulate import build_model
+    from rotorflow.quasi1d.synthetic import sin2_table
+
+    num = Numerics()
+    model = build_model(sin2_table(rows=721), _pentane_op(0.2),
+                        Leakage(gap_m=20e-6, model="nozzle"), numerics=num)
+    atol = num.atol * model.atol_scales()
+    y0 = model.initial_state()[None]
+    ros = integrate.integrate_period(model, y0, "ros23", num.rtol, atol)
+    assert sum(map(len, ros.steps)) > integrate.AUTO_ROS23_STEPS
+    monkeypatch.setattr(integrate, "AUTO_STIFF_STEPS", 50)
+    run = integrate.integrate_period(model, y0, "auto", num.rtol, atol)
+    ref = integrate.integrate_period(model, y0, "dopri5", num.rtol, atol)
+    assert run.method == "dopri5" and sum(map(len, run.steps)) > 50
+    np.testing.assert_array_equal(run.y, ref.y)

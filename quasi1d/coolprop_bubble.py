@@ -87,7 +87,8 @@ def continue_wet_side(tab: np.ndarray, dome: np.ndarray, x: np.ndarray,
     """Replace, in place, the first two liquid nodes of each column of u of the table
     (5, nx, nu) by the wet mixture's continuation, linear in ln rho through the two wet
     nodes below them (``dome``: the nodes inside the dome).  A column without two wet
-    nodes under its liquid keeps its nodes."""
+    nodes under its liquid keeps its nodes, and so does one whose continuation would
+    reach a kappa or a pressure derivative that is not positive (a wet mixture's are)."""
     rho = np.exp(x)
     for j in range(tab.shape[2]):
         liquid = np.nonzero(~dome[:, j] & (rho > rho_b[j]))[0]
@@ -98,9 +99,10 @@ def continue_wet_side(tab: np.ndarray, dome: np.ndarray, x: np.ndarray,
         if k.size < 2 or k[-1] - k[-2] != 1 or liquid[0] - k[-1] > 2:
             continue
         top, below = tab[:, k[-1], j], tab[:, k[-2], j]
-        for i in liquid[:2]:
-            if i - k[-1] <= 2:
-                tab[:, i, j] = top + (i - k[-1]) * (top - below)
+        ghosts = [(i, top + (i - k[-1]) * (top - below)) for i in liquid[:2] if i - k[-1] <= 2]
+        if all(np.all(g[2:] > 0.0) for _, g in ghosts):
+            for i, g in ghosts:
+                tab[:, i, j] = g
 
 
 def liquid_state(table, j, tu, rho, du):

@@ -472,6 +472,26 @@ def test_liquid_derivatives_are_those_of_its_pressure_and_the_kernel_agrees():
         np.testing.assert_array_equal(a, b)
 
 
+def test_wet_side_continuation_only_where_it_stays_a_wet_state():
+    # made-up nodes: three wet, then liquid; the first liquid node gets the line through
+    # the last two wet ones, unless that line takes kappa or a derivative to <= 0
+    from rotorflow.quasi1d.coolprop_bubble import continue_wet_side
+
+    x = np.log(np.array([100.0, 200.0, 400.0, 800.0]))
+    dome = np.array([[True], [True], [True], [False]])
+    wet = np.array([[1.0, 2.0, 3.0, 50.0], [300, 301, 302, 290], [0.5, 0.4, 0.3, 9.0],
+                    [40, 30, 20, 5e5], [3.0, 2.5, 2.0, 90.0]])[:, :, None]
+    tab = wet.copy()
+    continue_wet_side(tab, dome, x, np.array([600.0]))
+    np.testing.assert_allclose(tab[:, 3, 0], 2 * wet[:, 2, 0] - wet[:, 1, 0])
+    np.testing.assert_array_equal(tab[:, :3], wet[:, :3])
+    steep = wet.copy()
+    steep[2, 1, 0] = 0.8  # kappa 0.8 -> 0.3: continued to -0.2
+    tab = steep.copy()
+    continue_wet_side(tab, dome, x, np.array([600.0]))
+    np.testing.assert_array_equal(tab, steep)
+
+
 @pytest.mark.parametrize("q", [0.3, 0.1])
 def test_wet_pumping_through_the_bubble_line_converges_and_conserves(q):
     # Before the table carried the bubble line: quality 0.3 ended in step-size underflow

@@ -16,6 +16,7 @@ everywhere (no fold) and the offset polygon is simple.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -24,6 +25,7 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
+from .offset_corners import corner_trims
 from .planar import cross
 from .spline import CubicSpline
 
@@ -182,11 +184,34 @@ class Clearance:
 
 @dataclass(frozen=True)
 class OffsetProfile:
-    """``base`` moved along its outward normal by ``direction * c(u)``."""
+    """``base`` moved along its outward normal by ``direction * c(u)``.
+
+    With ``trims`` (per piece, the local parameter range (lo, hi) of the base that the
+    offset keeps: :mod:`.offset_corners`, cut where two pieces' offsets cross at a sharp
+    corner) the offset's own parameter u = j + t runs over piece j's kept range, t in
+    [0, 1) -> lo + (hi - lo) t; without, it is the base's."""
 
     base: PieceCurve
     clearance: Clearance
     direction: int  # +1 grows the enclosed region, -1 shrinks it
+    trims: tuple[tuple[float, float], ...] | None = None
+
+    def base_param(self, u):
+        """(the base's parameter at the offset's u, d(base u) / du)."""
+        if self.trims is None:
+            return np.asarray(u, dtype=float), 1.0
+        j, t = self.base._split(u)
+        lo, hi = np.asarray(self.trims).T
+        return j + lo[j] + (hi[j] - lo[j]) * t, hi[j] - lo[j]
+
+    def base_point(self, u):
+        """The base profile's point under the offset's u."""
+        return self.base.point(self.base_param(u)[0])
+
+    def base_derivative(self, u):
+        """d/du of :meth:`base_point` (the base's slope times the trimmed range)."""
+        bu, k = self.base_param(u)
+        return self.base.derivative(bu) * np.asarray(k)[..., None]
 
     @property
     def name(self):
@@ -205,17 +230,20 @@ class OffsetProfile:
         return self.base.material_inside
 
     def offset(self, u):
-        return self.direction * self.clearance(self.base.lobe_fraction(u))
+        return self.direction * self.clearance(self.lobe_fraction(u))
 
     def point(self, u):
-        return self.base.point(u) + self.offset(u)[..., None] * self.base.normal(u)
+        bu, _ = self.base_param(u)
+        return self.base.point(bu) + self.offset(u)[..., None] * self.base.normal(bu)
 
     def derivative(self, u):
         if self.clearance.uniform:
             # d/du (c n) = c kappa p' = c (kappa |p'|) t: finite where |p'| vanishes.
-            d = self.base.derivative(u)
+            bu, k = self.base_param(u)
+            d = self.base.derivative(bu)
             t = d / np.maximum(np.linalg.norm(d, axis=-1), 1e-300)[..., None]
-            return d + (self.offset(u) * self.base.turning_rate(u))[..., None] * t
+            out = d + (self.offset(u) * self.base.turning_rate(bu))[..., None] * t
+            return out * np.asarray(k)[..., None]
         j, t = self.base._split(u)
         h = 1e-6
         lo = j + np.clip(t - h, 0.0, 1.0 - 1e-12)
@@ -223,7 +251,7 @@ class OffsetProfile:
         return (self.point(hi) - self.point(lo)) / (hi - lo)[..., None]
 
     def normal(self, u):
-        return self.base.normal(u)
+        return self.base.normal(self.base_param(u)[0])
 
     def second_derivative(self, u):
         j, t = self.base._split(u)
@@ -245,19 +273,31 @@ class OffsetProfile:
 
         The offset of ``s p`` (the base scaled by s, the offset not) encloses
         ``s^2 A + d s M1 + M2``: exact for a regular offset (uniform c: c P, pi c^2).
+        Trimmed at corners, M2 is what makes the sum the trimmed curve's own area (Green's
+        theorem along it): each corner's c^2 tan(turn / 2) replaces the regular formula's
+        share, exact at s = 1 and to O(c^3 kappa) on a scaled section.
         """
         b = self.base
+        if self.trims is not None:
+            m1 = self._first_moment()
+            own = 0.5 * b.integrate(lambda u: cross(self.point(u), self.derivative(u)))
+            return m1, own - b.area - self.direction * m1
         if self.clearance.uniform:
             c = self.clearance.values[0]
             return c * b.length, math.pi * c * c
 
-        def first(u):
-            return self.clearance(b.lobe_fraction(u)) * np.linalg.norm(b.derivative(u), axis=-1)
-
         def second(u):
             return self.clearance(b.lobe_fraction(u)) ** 2 * b.turning_rate(u)
 
-        return b.integrate(first), 0.5 * b.integrate(second)
+        return self._first_moment(), 0.5 * b.integrate(second)
+
+    def _first_moment(self) -> float:
+        """\\oint c ds along the whole base profile."""
+        b = self.base
+        if self.clearance.uniform:
+            return self.clearance.values[0] * b.length
+        return b.integrate(lambda u: self.clearance(b.lobe_fraction(u))
+                           * np.linalg.norm(b.derivative(u), axis=-1))
 
     @cached_property
     def area(self) -> float:
@@ -270,7 +310,7 @@ class OffsetProfile:
         return self.base.integrate(lambda u: np.linalg.norm(self.derivative(u), axis=-1))
 
     def lobe_fraction(self, u):
-        return self.base.lobe_fraction(u)
+        return self.base.lobe_fraction(self.base_param(u)[0])
 
     @cached_property
     def radius_max(self) -> float:
@@ -315,7 +355,8 @@ def offset_profile(base: PieceCurve, clearance: Clearance, direction: int):
             f"({p[0] * 1e3:.3f}, {p[1] * 1e3:.3f}) mm"
             + ("; apply the clearance to the outer rotor" if base.material_inside else "")
         )
-    return off
+    trims = corner_trims(off)
+    return off if trims is None else dataclasses.replace(off, trims=trims)
 
 
 # ------------------------------------------------------------------ sampling

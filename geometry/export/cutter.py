@@ -56,6 +56,9 @@ SPACE_SCAN = 512
 #: A scan point is the extremum itself when the radial slope there is below this share
 #: of its neighbours' (rounding, at a symmetric profile's root or tip).
 SPACE_SNAP = 1e-9
+#: Radii within this share of a root's or tip's lie on its arc (a constant radius, to
+#: rounding): the space's root is that arc's middle, its tips the arcs' ends.
+SPACE_FLAT = 1e-12
 
 
 @dataclass(frozen=True)
@@ -140,12 +143,42 @@ def tooth_space(curve) -> tuple[float, float, float]:
         return u, np.linalg.norm(curve.point(u), axis=-1)
 
     u, r = scan(-0.5 * per)
-    root = _extremum(curve, float(u[np.argmin(r)]), h)
+    lo, hi = _flat(curve, u, r, int(np.argmin(r)), h)
+    root = _extremum(curve, float(u[np.argmin(r)]), h) if lo == hi else 0.5 * (lo + hi)
     ub, rb = scan(root - per)
     ua, ra = scan(root)
-    before = _extremum(curve, float(ub[1:-1][np.argmax(rb[1:-1])]), h)
-    after = _extremum(curve, float(ua[1:-1][np.argmax(ra[1:-1])]), h)
+    ib, ia = int(np.argmax(rb[1:-1])) + 1, int(np.argmax(ra[1:-1])) + 1
+    # a tip that is an arc of the outer radius (the trochoidal profile's) bounds the
+    # space at its end next to the root: the corner, where the space's flank begins
+    before = _flat(curve, ub, rb, ib, h)[1]
+    after = _flat(curve, ua, ra, ia, h)[0]
+    before = _extremum(curve, float(ub[ib]), h) if before == ub[ib] else before
+    after = _extremum(curve, float(ua[ia]), h) if after == ua[ia] else after
     return before, root, after
+
+
+def _flat(curve, u, r, i: int, h: float) -> tuple[float, float]:
+    """The ends of the arc of the extreme radius r[i] about scan point i (radii within
+    SPACE_FLAT of it), each found to rounding between its last scan point and the next;
+    (u[i], u[i]) where the extremum is a point."""
+    def on(x):
+        return abs(float(np.linalg.norm(curve.point(np.array([x]))[0])) - r[i]) \
+            <= SPACE_FLAT * r[i]
+
+    ends = []
+    for step in (-1, 1):
+        j = i
+        while 0 <= j + step < len(u) and abs(r[j + step] - r[i]) <= SPACE_FLAT * r[i]:
+            j += step
+        if j == i:
+            ends.append(float(u[i]))
+            continue
+        a, b = float(u[j]), float(u[j]) + step * h  # on, off the arc
+        for _ in range(BISECT):
+            mid = 0.5 * (a + b)
+            a, b = (mid, b) if on(mid) else (a, mid)
+        ends.append(a)
+    return ends[0], ends[1]
 
 
 def _helix(p, dp, z, k):

@@ -24,7 +24,9 @@ names the circular, trochoidal and involute profiles; it gives no dimensions):
   rho (t = 0) out to R at cos t_R = C / (2R) = r / R, where Im X = sin t (2 R cos t -
   C) = 0 -- it ends on the ray it started on.  The flank spans no angle, which is why
   tip and root arcs take half a lobe each.  Sharp tip corners: small carry-over, large
-  blow-hole (the seed's words).
+  blow-hole (the seed's words).  A clearance offset cuts the pieces' offsets where they
+  cross at a corner (:mod:`..offset_corners`); no disc cutter can make the rotor, since
+  its flanks run under its tip arcs (the tool cuts 7 mm into the tips).
 
 * ``involute`` (:func:`involute_rack`): a rack of straight flanks joined by a tip and a
   root circle of one radius, tangent to both (rack generation, as seed 003 says of its

@@ -15,8 +15,7 @@ import numpy as np
 import pytest
 
 from rotorflow.errors import CaseError
-from rotorflow.geometry.curves import (Clearance, PieceCurve, offset_profile, sample,
-                                       sample_polygon)
+from rotorflow.geometry.curves import Clearance, PieceCurve, offset_profile, sample, sample_polygon
 from rotorflow.geometry.polygons import check_simple, polygon_gap, signed_area
 from rotorflow.geometry.twin_screw.meshing import Gearing
 from rotorflow.geometry.twin_screw.pump_profiles import trochoidal_pair

@@ -329,8 +329,7 @@ def test_the_trochoidal_tooth_space_runs_between_its_tip_corners():
     the arc.  The disc cutter for that space regenerates the flank (0.3 um measured,
     bound 1 um) but cuts into the rotor by millimetres (7.1 mm measured): the flank runs
     under the tip arc, as the polar angle of its points shows, past the corner's ray."""
-    from rotorflow.geometry.export.cutter import (default_setup, form_cutter, round_trip,
-                                                  tooth_space)
+    from rotorflow.geometry.export.cutter import default_setup, form_cutter, round_trip, tooth_space
     from rotorflow.geometry.sweep import Sweep
 
     pair = build("trochoidal", 1, 1, C, 0.110, 0.110)

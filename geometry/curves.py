@@ -184,12 +184,9 @@ class Clearance:
 
 @dataclass(frozen=True)
 class OffsetProfile:
-    """``base`` moved along its outward normal by ``direction * c(u)``.
-
-    With ``trims`` (per piece, the local parameter range (lo, hi) of the base that the
-    offset keeps: :mod:`.offset_corners`, cut where two pieces' offsets cross at a sharp
-    corner) the offset's own parameter u = j + t runs over piece j's kept range, t in
-    [0, 1) -> lo + (hi - lo) t; without, it is the base's."""
+    """``base`` moved along its outward normal by ``direction * c(u)``.  With ``trims``
+    (per piece, the base's local range (lo, hi) kept: cut at sharp corners,
+    :mod:`.offset_corners`) its own u = j + t runs over piece j's, t -> lo + (hi - lo) t."""
 
     base: PieceCurve
     clearance: Clearance
@@ -197,21 +194,12 @@ class OffsetProfile:
     trims: tuple[tuple[float, float], ...] | None = None
 
     def base_param(self, u):
-        """(the base's parameter at the offset's u, d(base u) / du)."""
+        """(the base's parameter at the offset's u, d(base u) / du: the trimmed range)."""
         if self.trims is None:
             return np.asarray(u, dtype=float), 1.0
         j, t = self.base._split(u)
         lo, hi = np.asarray(self.trims).T
         return j + lo[j] + (hi[j] - lo[j]) * t, hi[j] - lo[j]
-
-    def base_point(self, u):
-        """The base profile's point under the offset's u."""
-        return self.base.point(self.base_param(u)[0])
-
-    def base_derivative(self, u):
-        """d/du of :meth:`base_point` (the base's slope times the trimmed range)."""
-        bu, k = self.base_param(u)
-        return self.base.derivative(bu) * np.asarray(k)[..., None]
 
     @property
     def name(self):

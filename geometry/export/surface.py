@@ -74,7 +74,8 @@ class SweptSurface:
         u, z = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(z, dtype=float))
         curve = self.curve
         offset = isinstance(curve, OffsetProfile)
-        p = curve.base_point(u) if offset else curve.point(u)
+        bu, k = curve.base_param(u) if offset else (u, 1.0)  # (trimmed at corners)
+        p = self.base.point(bu)
         w = curve.offset(u)[..., None] * curve.normal(u) if offset else 0.0
         s = self.sweep.scale(z)[..., None]
         c, sn = _rot(self.theta(z))
@@ -84,7 +85,7 @@ class SweptSurface:
         pt = np.concatenate([rq + s * centre, z[..., None]], -1)
         if not jacobian:
             return pt
-        dp = curve.base_derivative(u) if offset else curve.derivative(u)
+        dp = self.base.derivative(bu) * np.asarray(k)[..., None]
         qu = s * dp + ((curve.derivative(u) - dp) if offset else 0.0)
         su = _apply(c, sn, qu)
         ds = self.sweep.dscale(z)[..., None]

@@ -29,8 +29,9 @@ from rotorflow.errors import CaseError
 
 from .planar import cross
 
-#: A junction whose tangent turns by more than this (rad) is a corner.  Below it the raw
-#: offsets miss each other by at most c x CORNER_TURN (4 nm at 40 um), far below any
+#: A junction whose tangent turns by more than this (rad) is a corner (tangent joins
+#: agree to ~1e-9, the pin-cycloid's and trochoidal's corners by degrees).  Below it the
+#: raw offsets miss each other by at most c x CORNER_TURN (4 nm at 40 um), far below any
 #: export tolerance, and the pieces are left whole.
 CORNER_TURN = 1e-4
 #: Newton's iterations for the crossing and the distance (per C) at which it stops.
@@ -40,12 +41,14 @@ NEWTON_TOL = 1e-14
 END = 1.0 - 1e-12
 
 
-def _corner_turn(base, j: int) -> float:
+def joint_turn(profile, j: int) -> float:
     """Signed turn (rad, counter-clockwise positive) of the tangent from the end of the
-    piece before ``j`` to the start of piece ``j``."""
-    n = base.n
-    a = base.derivative(np.array([(j - 1) % n + END]))[0]
-    b = base.derivative(np.array([float(j)]))[0]
+    piece before ``j`` to the start of piece ``j``; NaN where either tangent vanishes."""
+    n = profile.n
+    a = profile.derivative(np.array([(j - 1) % n + END]))[0]
+    b = profile.derivative(np.array([float(j)]))[0]
+    if not (a.any() and b.any()):
+        return math.nan
     return math.atan2(float(cross(a, b)), float(a @ b))
 
 
@@ -86,8 +89,8 @@ def corner_trims(raw) -> tuple[tuple[float, float], ...] | None:
     n = base.n
     lo, hi = np.zeros(n), np.ones(n)
     for j in range(n):
-        turn = _corner_turn(base, j)
-        if abs(turn) <= CORNER_TURN:
+        turn = joint_turn(base, j)
+        if not abs(turn) > CORNER_TURN:  # (a vanishing tangent is no corner to cut)
             continue
         p = base.point(np.array([float(j)]))[0] * 1e3
         where = f"its corner at ({p[0]:.3f}, {p[1]:.3f}) mm, where the profile turns by " \

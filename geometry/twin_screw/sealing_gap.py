@@ -56,6 +56,7 @@ from ..gap_section import (
     local_gap,
     surface_speeds,
 )
+from ..offset_corners import CORNER_TURN, joint_turn
 from ..planar import rotate
 from .regions import _inside
 from .section import chamber_index
@@ -80,9 +81,6 @@ FOOT_SEEDS = 4
 BAND_STEP = 1e-3
 #: Two contacts closer than this (per C) are one (the section table's SAME_POINT).
 SAME_POINT = 1e-6
-#: A joint of two profile pieces whose tangents differ by more than this [rad] is a
-#: sharp corner: tangent joins agree to ~1e-9, the pin-cycloid's corners by degrees.
-CORNER_ANGLE = 1e-4
 #: A contact within this (per C) of a corner is at the corner.
 CORNER_NEAR = 1e-7
 #: Parameter span searched on each side of the contact on either profile, in lobes: half
@@ -91,8 +89,8 @@ LOBE_SPAN = 0.5
 #: Where the probes that tell the older side sit (per C): the unrelieved gap there is 8 um
 #: at C = 80 mm, far wider than the cut's grown rotors (2e-6 C) and chord error (1e-6 C).
 PROBE_GAP = 1e-4
-#: Offset in the profile parameter on either side of a joint at which its tangents are
-#: compared (analytic pieces: far below any real corner's size).
+#: Offset in the profile parameter from a sharp corner at which a relieved wall's search
+#: stops (analytic pieces: far below any real corner's size).
 JOINT_STEP = 1e-9
 CLEARANCE_ON = ("male", "female")
 
@@ -114,11 +112,8 @@ def _corners(profile) -> list[tuple[float, str]]:
     smooth)."""
     out = []
     for j in range(profile.n):
-        a = profile.derivative(np.array([j - JOINT_STEP if j else profile.n - JOINT_STEP]))[0]
-        b = profile.derivative(np.array([float(j)]))[0]
-        na, nb = np.linalg.norm(a), np.linalg.norm(b)
-        angle = math.atan2(abs(a[0] * b[1] - a[1] * b[0]), float(a @ b)) if na * nb else math.pi
-        if angle > CORNER_ANGLE:
+        turn = joint_turn(profile, j)  # (a vanishing tangent: a corner, no tangent there)
+        if math.isnan(turn) or abs(turn) > CORNER_TURN:
             k = len(profile.pieces)
             out.append((float(j), f"the {profile.name} profile (between its "
                                   f"{profile.pieces[(j - 1) % k].name} and its "

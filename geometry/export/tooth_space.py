@@ -4,9 +4,8 @@ to the next tip (:mod:`.cutter`).
 The root is the smallest radius of the lobe period centred on u = 0, the tips the
 largest radii within a lobe period either side.  Where a root or a tip is an arc of one
 radius about the rotor's axis (the trochoidal pump profile's tip and root arcs), the
-root is the middle of the arc's parameter range (its middle on a circular piece) and each
-tip the end of its arc next to the root: the corner
-where the space's flank begins.
+root is the middle of the arc's parameter range (its middle on a circular piece) and
+each tip the end of its arc next to the root: the corner where the space's flank begins.
 """
 
 from __future__ import annotations

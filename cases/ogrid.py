@@ -1,7 +1,7 @@
 """A structured O-grid of the internal-gear working domain at one rotor angle (issue 16).
 
 The working domain is the fluid between the outer rotor's inner profile (relieved by the
-clearance, a true normal offset, :func:`..geometry.curves.offset_profile`, as in
+clearance, a true normal offset, :func:`..geometry.offsets.offset_profile`, as in
 :mod:`..geometry.internal_gear.sealing_gap`) and the inner rotor: an annulus.  One block
 covers it, ``columns`` cells around and ``cells_across_gap`` cells from the inner wall to
 the outer one, so every sealing gap is spanned by exactly that many cells, and the node
@@ -44,7 +44,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from rotorflow.errors import CaseError
-from rotorflow.geometry.curves import Clearance, offset_profile
+from rotorflow.geometry.offsets import Clearance, offset_profile
 from rotorflow.geometry.planar import TWO_PI, rotate
 
 from .ogrid_columns import anchor_parameters, column_angles, segment_columns

@@ -5,7 +5,7 @@ frame: origin at the contact point of the conjugate (unrelieved) pair, y along t
 contact normal (from the lower wall's rotor into the upper wall's), x along the common
 tangent, pointing from the older (higher-pressure) chamber into the younger one.  A wall
 is one rotor's true profile (one of them relieved by the clearance, a normal offset,
-:func:`.curves.offset_profile`) as a function ``xy(u)`` of its own parameter into that
+:func:`.offsets.offset_profile`) as a function ``xy(u)`` of its own parameter into that
 frame, sampled over a span ``u`` through the contact.
 
 :func:`cut_section` returns both walls as polylines y(x) over the same x range, cut where

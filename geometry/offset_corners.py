@@ -8,15 +8,15 @@ clearances from the corner (beta the corner's interior angle), and the raw offse
 on past it into a small loop: the profile offset by a clearance is the set of points
 at that distance from the material's edge, and its corner is that crossing.  So each
 piece's offset is cut at the crossing (its parameter range trimmed,
-:class:`..curves.OffsetProfile`'s ``trims``); every point kept is at exactly the
+:class:`.offsets.OffsetProfile`'s ``trims``); every point kept is at exactly the
 clearance from the base profile.
 
 Offset the other way at a corner (a rotor grown at a convex corner, shrunk at a
 concave one: the pin-cycloid male's root corners, 90 deg), the two offsets part; the
-true offset there is the circular arc of the clearance about the corner, and the pieces
-are left whole, so a polygon through them closes the gap with a chord, which passes
-c cos(t / 2) from the corner instead of c (0.71 c at 90 deg), as before corners were
-cut.  Not done: the arc (a piece more in the offset profile).
+points at the clearance from the corner there are the circular arc of radius c about
+it, from one piece's end normal to the next one's start normal, so the offset goes
+round it (:func:`corner_arcs`; a polygon through the two offsets' ends alone would
+close the gap with a chord c cos(t / 2) from the corner, 0.71 c at 90 deg).
 """
 
 from __future__ import annotations
@@ -80,6 +80,18 @@ def _crossing(raw, i: int, j: int) -> tuple[float, float]:
     return a, b
 
 
+def corner_arcs(raw) -> tuple[float, ...] | None:
+    """Per piece of the untrimmed offset ``raw`` (an OffsetProfile): the turn (rad) of
+    the base's tangent at the piece's start where the two offsets part there (the
+    offset goes round that corner on an arc of the clearance), else 0; None without
+    such corners."""
+    base = raw.base
+    turns = [joint_turn(base, j) for j in range(base.n)]
+    arcs = tuple(t if abs(t) > CORNER_TURN and raw.direction * t > 0.0 else 0.0
+                 for t in turns)
+    return arcs if any(arcs) else None
+
+
 def corner_trims(raw) -> tuple[tuple[float, float], ...] | None:
     """Per piece of the untrimmed offset ``raw`` (an OffsetProfile), the local parameter
     range (lo, hi) it keeps, each piece cut where it crosses its neighbour's offset at
@@ -96,7 +108,7 @@ def corner_trims(raw) -> tuple[tuple[float, float], ...] | None:
         where = f"its corner at ({p[0]:.3f}, {p[1]:.3f}) mm, where the profile turns by " \
                 f"{math.degrees(turn):.1f} deg"
         if raw.direction * turn > 0.0:
-            continue  # the offsets part here: left whole (module docstring)
+            continue  # the offsets part here: an arc joins them (corner_arcs)
         i = (j - 1) % n
         a, b = _crossing(raw, i, j)
         qa = raw.point(np.array([i + a]))[0]

@@ -7,16 +7,11 @@ import numpy as np
 import pytest
 
 from rotorflow.errors import CaseError
-from rotorflow.geometry.curves import (
-    Clearance,
-    closest,
-    offset_profile,
-    sample,
-    sample_polygon,
-)
+from rotorflow.geometry.curves import closest, sample, sample_polygon
 from rotorflow.geometry.internal_gear.pair import PinGerotor
 from rotorflow.geometry.internal_gear.profiles import inner_profile, outer_profile
 from rotorflow.geometry.internal_gear.space import PinSpace
+from rotorflow.geometry.offsets import Clearance, offset_profile
 from rotorflow.geometry.planar import cross
 from rotorflow.geometry.polygons import (
     check_simple,

@@ -17,8 +17,9 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from ..curves import Clearance, offset_profile, region_volume, sample_polygon
+from ..curves import sample_polygon
 from ..machine import SweptMachine
+from ..offsets import Clearance, offset_profile, region_volume
 from ..polygons import check_simple
 from ..summary import build_machine
 from .casing import largest_radius, union_area

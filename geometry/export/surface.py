@@ -18,7 +18,8 @@ from functools import cached_property
 
 import numpy as np
 
-from ..curves import OffsetProfile, PieceCurve
+from ..curves import PieceCurve
+from ..offsets import OffsetProfile
 from ..sweep import Sweep
 
 log = logging.getLogger(__name__)

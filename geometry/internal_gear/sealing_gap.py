@@ -2,7 +2,7 @@
 
 At outer-rotor angle ``phi1`` the leading pin (pin 0) of the chamber space touches the
 inner rotor.  In a real machine one rotor is relieved by a clearance ``gap``: its profile
-is offset along its own normal (a true normal offset, :func:`..curves.offset_profile`,
+is offset along its own normal (a true normal offset, :func:`..offsets.offset_profile`,
 not a shift), into the outer rotor by default, as for the solids (``clearance_on``).  The
 section is written in the gap's own frame: origin at the contact point of the conjugate
 (unrelieved) pair, y along the contact normal (from the inner rotor into the pin), x along
@@ -35,8 +35,8 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from ..curves import Clearance, offset_profile
 from ..gap_section import SEARCH_SAMPLES, Wall, check_arguments, cut_section, surface_speeds
+from ..offsets import Clearance, offset_profile
 from ..planar import TWO_PI, rotate
 from .pair import PinGerotor
 from .profiles import inner_profile, outer_profile

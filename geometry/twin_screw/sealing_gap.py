@@ -10,7 +10,7 @@ the interlobe sealing line through the mesh; ``contact`` picks another by its in
 that list).
 
 In a real machine one rotor is relieved by a clearance ``gap``: its profile is offset
-along its own normal into its material (:func:`..curves.offset_profile`, a true normal
+along its own normal into its material (:func:`..offsets.offset_profile`, a true normal
 offset), the male's by default (the reference rotor, as for the solids;
 ``clearance_on`` = "male" or "female").  The frame is the internal gear's
 (:mod:`..gap_section`): origin at the contact of the conjugate (unrelieved) pair, y along
@@ -46,7 +46,7 @@ from scipy.spatial import cKDTree
 
 from rotorflow.errors import CaseError
 
-from ..curves import Clearance, closest, offset_profile, sample
+from ..curves import closest, sample
 from ..gap_section import (
     SEARCH_SAMPLES,
     Wall,
@@ -57,6 +57,7 @@ from ..gap_section import (
     surface_speeds,
 )
 from ..offset_corners import CORNER_TURN, joint_turn
+from ..offsets import Clearance, offset_profile
 from ..planar import rotate
 from .regions import _inside
 from .section import chamber_index
@@ -271,19 +272,26 @@ def _walls(pair, psi, x0, n, t, profiles, ys, spans):
             Wall("female", female_xy, spans[1][0], ys[1], spans[1][1]))
 
 
-def _spans(pair, pick: Contact, relieved: str | None):
-    """(parameters, end reasons) searched on each profile around the contact; the relieved
-    profile's stop short of its sharp corners (its normal offset ends there)."""
+def _spans(pick: Contact, profiles, relieved: str | None):
+    """(parameters, end reasons) searched on each of ``profiles`` (male, female) around
+    the contact.  The relieved one is an offset (its own parameters): its span stops
+    short of its sharp corners, where its cut pieces meet (it goes round the corners it
+    is grown about on the clearance's arc, which are no corners of it)."""
     out = []
-    for name, profile, u0 in (("male", pair.male, pick.u_male),
-                              ("female", pair.female, pick.u_female)):
-        half = LOBE_SPAN * len(profile.pieces)
-        lo, hi = u0 - half, u0 + half
+    for name, profile, u0 in (("male", profiles[0], pick.u_male),
+                              ("female", profiles[1], pick.u_female)):
         ends = ["reaches the end of the searched span"] * 2
+        if name == relieved:
+            u0 = float(profile.own_param(u0))
+        half = LOBE_SPAN * profile.n / profile.lobes
+        lo, hi = u0 - half, u0 + half
         corner = "reaches a sharp corner of its relieved profile, where the offset ends"
         if name == relieved:
-            for uc, _ in _corners(profile):
-                for v in (uc - profile.n, uc, uc + profile.n):
+            for j in range(profile.n):
+                turn = joint_turn(profile, j)
+                if not (math.isnan(turn) or abs(turn) > CORNER_TURN):
+                    continue
+                for v in (j - profile.n, j, j + profile.n):
                     if u0 < v < hi:
                         hi, ends[1] = v - JOINT_STEP, corner
                     elif lo < v < u0:
@@ -299,7 +307,7 @@ def _frame(pair, psi: float, contact: int | None):
     n = rotate(pair.male.normal(np.array([pick.u_male])), psi)[0]
     t = np.array([n[1], -n[0]])
     lower, upper = _walls(pair, psi, x0, n, t, (pair.male, pair.female), (0.0, 0.0),
-                          _spans(pair, pick, None))
+                          _spans(pick, (pair.male, pair.female), None))
     lo_b, up_b = branch(lower), branch(upper)
     xs, gap = local_gap(lo_b, up_b)
     k = int(np.argmin(np.abs(xs)))
@@ -364,7 +372,8 @@ def sealing_gap_walls(pair, psi: float, gap: float, inlet_ratio: float = 20.0,
     pick, x0, n, t = _frame(pair, psi, contact)
     profiles = _relieved(pair, gap, clearance_on, where)
     ys = (-gap, 0.0) if clearance_on == "male" else (0.0, gap)
-    lower, upper = _walls(pair, psi, x0, n, t, profiles, ys, _spans(pair, pick, clearance_on))
+    lower, upper = _walls(pair, psi, x0, n, t, profiles, ys,
+                          _spans(pick, profiles, clearance_on))
     return cut_section(lower, upper, gap, inlet_ratio, outlet_ratio, points, where,
                        pair.diameter)
 

@@ -136,27 +136,44 @@ class Events:
 
     def _gaps_each(self, ring, cls, k, x, dpsi, orient) -> np.ndarray:
         """Signed distance of each point x[v] of rotor k, moved rigidly by dpsi[v] with
-        the ring, to the ring's edges not along rotor k (positive inside the ring)."""
+        the ring, to the ring's edges not along rotor k (positive inside the ring).
+
+        Distances and sides do not change under a rotation, so an edge whose two ends
+        move together (one rotor's, or a still curve's) stays put and the points are
+        turned back into its frame instead (a few points against every edge end per
+        point); an edge between two surfaces moves its ends apart and is moved."""
         on = cls == k
         other = np.nonzero(~(on & np.roll(on, -1)))[0]
-        ends = np.concatenate([other, (other + 1) % len(ring)])
-        q = np.broadcast_to(ring[ends], (len(x), len(ends), 2)).copy()
-        for c, (axis, ratio, *_rest) in enumerate(self.surfaces.rotors):
-            sel = cls[ends] == c
-            if sel.any():
-                q[:, sel] = _turn(ring[ends][sel] - axis, ratio * dpsi) + axis
-        axis, ratio = self.surfaces.rotors[k][:2]
+        nxt = (other + 1) % len(ring)
+        dpsi = np.broadcast_to(np.asarray(dpsi, dtype=float), (len(x),))
+        rotors = self.surfaces.rotors
+        axis, ratio = rotors[k][:2]
         y = _turn((x - axis)[:, None], ratio * dpsi)[:, 0] + axis
-        a, b = q[:, :len(other)], q[:, len(other):]
-        ab = b - a
-        t = np.clip(np.einsum("vek,vek->ve", y[:, None] - a, ab)
-                    / np.maximum(np.einsum("vek,vek->ve", ab, ab), 1e-300), 0.0, 1.0)
-        dist = np.linalg.norm(y[:, None] - (a + t[..., None] * ab), axis=-1)
-        j = np.argmin(dist, axis=1)
-        v = np.arange(len(x))
-        rel = y - a[v, j]
-        side = np.sign(ab[v, j, 0] * rel[:, 1] - ab[v, j, 1] * rel[:, 0]) * orient
-        return side * dist[v, j]
+        best = np.full(len(x), np.inf)
+        signed = np.zeros(len(x))
+        ca, cb = cls[other], cls[nxt]
+        same = ca == cb
+        for c in np.unique(ca[same]):
+            sel = same & (ca == c)
+            if 0 <= c < len(rotors):
+                ax, r = rotors[c][:2]
+                yc = _turn((y - ax)[:, None], -r * dpsi)[:, 0] + ax
+            else:
+                yc = y
+            a, b = ring[other[sel]][None], ring[nxt[sel]][None]
+            dist, side = _edge_distance(yc[:, None], a, b)
+            _keep_nearest(best, signed, dist, side)
+        if not same.all():
+            ends = np.concatenate([other[~same], nxt[~same]])
+            q = np.broadcast_to(ring[ends], (len(x), len(ends), 2)).copy()
+            for c, (ax, r, *_rest) in enumerate(rotors):
+                on_c = cls[ends] == c
+                if on_c.any():
+                    q[:, on_c] = _turn(ring[ends][on_c] - ax, r * dpsi) + ax
+            m = int((~same).sum())
+            dist, side = _edge_distance(y[:, None], q[:, :m], q[:, m:])
+            _keep_nearest(best, signed, dist, side)
+        return signed * best * orient
 
     def _jumps(self, bands):
         """Bands of what a corner's jump exposed or covered between two samples (the
@@ -377,3 +394,26 @@ def _turning(p, t, smooth=True):
     if not (t[1] < a0 < t[2] and t[1] < a1 < t[2]):
         return None
     return 0.5 * (a0 + a1)
+
+
+def _edge_distance(y, a, b):
+    """Distances (v, e) of points y (v, 1, 2) to the segments a -> b (1 or v, e, 2) and
+    the side each lies on (+1 left of a -> b)."""
+    ab = b - a
+    ay = y - a
+    t = np.clip(np.einsum("vek,vek->ve", ay, np.broadcast_to(ab, ay.shape))
+                / np.maximum(np.einsum("vek,vek->ve", ab, ab), 1e-300), 0.0, 1.0)
+    dist = np.linalg.norm(ay - t[..., None] * ab, axis=-1)
+    side = np.sign(ab[..., 0] * ay[..., 1] - ab[..., 1] * ay[..., 0])
+    return dist, side
+
+
+def _keep_nearest(best, signed, dist, side):
+    """Per point (row): where its nearest of these edges beats ``best``, keep its
+    distance and side (in place)."""
+    j = np.argmin(dist, axis=1)
+    v = np.arange(len(best))
+    d = dist[v, j]
+    better = d < best
+    best[better] = d[better]
+    signed[better] = np.broadcast_to(side, dist.shape)[v, j][better]

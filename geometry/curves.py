@@ -42,6 +42,15 @@ def gauss_rule(n: int):
     return (np.arange(n)[:, None] + t[None, :]).ravel(), np.tile(wt, n)
 
 
+def piece_difference(curve, f, u, h: float):
+    """df/du of a function of the curve's parameter by a central difference of step h
+    kept inside u's piece (f may jump between pieces)."""
+    j, t = curve._split(u)
+    lo = j + np.clip(t - h, 0.0, 1.0 - 1e-12)
+    hi = j + np.clip(t + h, 0.0, 1.0 - 1e-12)
+    return (f(hi) - f(lo)) / (hi - lo)[..., None]
+
+
 class PieceCurve:
     """A closed counter-clockwise chain of analytic pieces (lengths in metres).
 
@@ -79,11 +88,7 @@ class PieceCurve:
 
     def second_derivative(self, u):
         """d2/du2 by a central difference of the (analytic) first derivative, in-piece."""
-        j, t = self._split(u)
-        h = 1e-5
-        lo = j + np.clip(t - h, 0.0, 1.0 - 1e-12)
-        hi = j + np.clip(t + h, 0.0, 1.0 - 1e-12)
-        return (self.derivative(hi) - self.derivative(lo)) / (hi - lo)[..., None]
+        return piece_difference(self, self.derivative, u, 1e-5)
 
     def normal(self, u):
         """Outward unit normal (right of the counter-clockwise tangent)."""

@@ -24,7 +24,7 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from .curves import PREGRID, PieceCurve, gauss_rule
+from .curves import PREGRID, PieceCurve, gauss_rule, piece_difference
 from .offset_corners import END, corner_arcs, corner_trims
 from .planar import cross, rotate
 from .spline import CubicSpline
@@ -173,11 +173,7 @@ class OffsetProfile:
             nrm = self.normal(u)
             jn = np.stack([-nrm[..., 1], nrm[..., 0]], -1)
             return np.where(arc[..., None], (self.offset(u) * turn)[..., None] * jn, out)
-        j, t = self._split(u)
-        h = 1e-6
-        lo = j + np.clip(t - h, 0.0, 1.0 - 1e-12)
-        hi = j + np.clip(t + h, 0.0, 1.0 - 1e-12)
-        return (self.point(hi) - self.point(lo)) / (hi - lo)[..., None]
+        return piece_difference(self, self.point, u, 1e-6)
 
     def normal(self, u):
         """The offset's direction: the base's normal, turning round a corner on an arc."""
@@ -187,16 +183,9 @@ class OffsetProfile:
         _, t, j, arc, turn = self._pieces(u)
         return np.where(arc[..., None], rotate(self._arc_normals[j], turn * t), nb)
 
-    def second_derivative(self, u):
-        j, t = self._split(u)
-        h = 1e-5
-        lo = j + np.clip(t - h, 0.0, 1.0 - 1e-12)
-        hi = j + np.clip(t + h, 0.0, 1.0 - 1e-12)
-        return (self.derivative(hi) - self.derivative(lo)) / (hi - lo)[..., None]
-
-    def curvature(self, u):
-        d1, d2 = self.derivative(u), self.second_derivative(u)
-        return cross(d1, d2) / np.linalg.norm(d1, axis=-1) ** 3
+    # (in-piece differences and curvature as a chain of pieces has them)
+    second_derivative = PieceCurve.second_derivative
+    curvature = PieceCurve.curvature
 
     def integrate(self, f) -> float:
         """\\oint f(u) du over the offset's own pieces (Gauss-Legendre panels)."""

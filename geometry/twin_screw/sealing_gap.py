@@ -113,13 +113,19 @@ def _corners(profile) -> list[tuple[float, str]]:
     smooth)."""
     out = []
     for j in range(profile.n):
-        turn = joint_turn(profile, j)  # (a vanishing tangent: a corner, no tangent there)
-        if math.isnan(turn) or abs(turn) > CORNER_TURN:
+        if _sharp(profile, j):
             k = len(profile.pieces)
             out.append((float(j), f"the {profile.name} profile (between its "
                                   f"{profile.pieces[(j - 1) % k].name} and its "
                                   f"{profile.pieces[j % k].name})"))
     return out
+
+
+def _sharp(profile, j: int) -> bool:
+    """Whether the joint before piece j is a corner (a vanishing tangent too: no
+    tangent there)."""
+    turn = joint_turn(profile, j)
+    return math.isnan(turn) or abs(turn) > CORNER_TURN
 
 
 def _female_angle(pair, psi: float) -> float:
@@ -287,10 +293,7 @@ def _spans(pick: Contact, profiles, relieved: str | None):
         lo, hi = u0 - half, u0 + half
         corner = "reaches a sharp corner of its relieved profile, where the offset ends"
         if name == relieved:
-            for j in range(profile.n):
-                turn = joint_turn(profile, j)
-                if not (math.isnan(turn) or abs(turn) > CORNER_TURN):
-                    continue
+            for j in filter(lambda k: _sharp(profile, k), range(profile.n)):
                 for v in (j - profile.n, j, j + profile.n):
                     if u0 < v < hi:
                         hi, ends[1] = v - JOINT_STEP, corner

@@ -15,7 +15,7 @@ Offset the other way at a corner (a rotor grown at a convex corner, shrunk at a
 concave one: the pin-cycloid male's root corners, 90 deg), the two offsets part; the
 points at the clearance from the corner there are the circular arc of radius c about
 it, from one piece's end normal to the next one's start normal, so the offset goes
-round it (:func:`corner_arcs`; a polygon through the two offsets' ends alone would
+round it (:func:`corner_cuts`'s arcs; a polygon through the two offsets' ends alone would
 close the gap with a chord c cos(t / 2) from the corner, 0.71 c at 90 deg).
 """
 
@@ -80,35 +80,28 @@ def _crossing(raw, i: int, j: int) -> tuple[float, float]:
     return a, b
 
 
-def corner_arcs(raw) -> tuple[float, ...] | None:
-    """Per piece of the untrimmed offset ``raw`` (an OffsetProfile): the turn (rad) of
-    the base's tangent at the piece's start where the two offsets part there (the
-    offset goes round that corner on an arc of the clearance), else 0; None without
-    such corners."""
-    base = raw.base
-    turns = [joint_turn(base, j) for j in range(base.n)]
-    arcs = tuple(t if abs(t) > CORNER_TURN and raw.direction * t > 0.0 else 0.0
-                 for t in turns)
-    return arcs if any(arcs) else None
-
-
-def corner_trims(raw) -> tuple[tuple[float, float], ...] | None:
-    """Per piece of the untrimmed offset ``raw`` (an OffsetProfile), the local parameter
-    range (lo, hi) it keeps, each piece cut where it crosses its neighbour's offset at
-    a corner of the base; None without such corners.  A CaseError names a clearance
-    that consumes a whole piece, or offsets that do not cross at a corner."""
+def corner_cuts(raw):
+    """(trims, arcs) of the untrimmed offset ``raw`` (an OffsetProfile) at the base's
+    corners, each corner told once by its turn: trims, per piece the local parameter
+    range (lo, hi) it keeps, each piece cut where it crosses its neighbour's offset;
+    arcs, per piece the turn (rad) of the tangent at its start where the two offsets
+    part there (the offset goes round that corner on the clearance's arc), else 0.
+    Either None without such corners.  A CaseError names a clearance that consumes a
+    whole piece, or offsets that do not cross at a corner."""
     base = raw.base
     n = base.n
     lo, hi = np.zeros(n), np.ones(n)
+    arcs = np.zeros(n)
     for j in range(n):
         turn = joint_turn(base, j)
         if not abs(turn) > CORNER_TURN:  # (a vanishing tangent is no corner to cut)
             continue
+        if raw.direction * turn > 0.0:
+            arcs[j] = turn  # the offsets part here
+            continue
         p = base.point(np.array([float(j)]))[0] * 1e3
         where = f"its corner at ({p[0]:.3f}, {p[1]:.3f}) mm, where the profile turns by " \
                 f"{math.degrees(turn):.1f} deg"
-        if raw.direction * turn > 0.0:
-            continue  # the offsets part here: an arc joins them (corner_arcs)
         i = (j - 1) % n
         a, b = _crossing(raw, i, j)
         qa = raw.point(np.array([i + a]))[0]
@@ -118,10 +111,10 @@ def corner_trims(raw) -> tuple[tuple[float, float], ...] | None:
             raise CaseError(f"a clearance on the {base.name} rotor does not close at {where}:"
                             f" its offsets there do not cross; make it smaller")
         hi[i], lo[j] = a, b
-    if np.all(lo == 0.0) and np.all(hi == 1.0):
-        return None
     if np.any(lo >= hi):
         k = int(np.argmax(lo >= hi))
         raise CaseError(f"a clearance on the {base.name} rotor consumes the whole piece {k} "
                         f"of its profile between two corners; make it smaller")
-    return tuple((float(x), float(y)) for x, y in zip(lo, hi, strict=True))
+    cut = np.any(lo > 0.0) or np.any(hi < 1.0)
+    trims = tuple((float(x), float(y)) for x, y in zip(lo, hi, strict=True)) if cut else None
+    return trims, (tuple(float(t) for t in arcs) if arcs.any() else None)

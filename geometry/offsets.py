@@ -25,7 +25,7 @@ import numpy as np
 from rotorflow.errors import CaseError
 
 from .curves import PREGRID, PieceCurve, gauss_rule, piece_difference
-from .offset_corners import END, corner_arcs, corner_trims
+from .offset_corners import END, corner_cuts
 from .planar import cross, rotate
 from .spline import CubicSpline
 
@@ -287,4 +287,5 @@ def offset_profile(base: PieceCurve, clearance: Clearance, direction: int):
             f"({p[0] * 1e3:.3f}, {p[1] * 1e3:.3f}) mm"
             + ("; apply the clearance to the outer rotor" if base.material_inside else "")
         )
-    return dataclasses.replace(off, trims=corner_trims(off), arcs=corner_arcs(off))
+    trims, arcs = corner_cuts(off)
+    return dataclasses.replace(off, trims=trims, arcs=arcs)

@@ -84,19 +84,26 @@ def balances(model: ChamberModel, y_start: np.ndarray, y_end: np.ndarray):
     work = max(abs(a[ACC_W]), e_ref)
     e_in = a[ACC_H_SUC] + a[ACC_W] + a[ACC_Q] + a[c.oil_h_in]
     e_out = a[ACC_H_DIS] + a[c.oil_h_out]
-    stored_e0 = y_start[n:2 * n].sum() + (y_start[3 * n:4 * n].sum() if nv == 4 else 0.0)
-    stored_e1 = y_end[n:2 * n].sum() + (y_end[3 * n:4 * n].sum() if nv == 4 else 0.0)
+    stored_e0 = y_start[n:2 * n].sum() + (y_start[3 * n:4 * n].sum() if nv >= 4 else 0.0)
+    stored_e1 = y_end[n:2 * n].sum() + (y_end[3 * n:4 * n].sum() if nv >= 4 else 0.0)
     # gas and oil (or liquid) are each conserved: each closes against its own throughput
-    # (a multiphase pump carries ~100 times more liquid than gas by mass)
-    gas = a[ACC_M_SUC] - a[ACC_M_DIS]
+    # (a multiphase pump carries ~100 times more liquid than gas by mass); a volatile
+    # liquid's evaporation moves mass from the liquid to the gas and its vapour (.humid)
+    evap = a[c.evaporated] if nv == 5 else 0.0
+    gas = a[ACC_M_SUC] - a[ACC_M_DIS] + evap
     mass_closure = abs(gas) / throughput
     cons_m = abs(y_end[:n].sum() - y_start[:n].sum() - gas) / throughput
-    if nv == 4:
-        liq = a[c.oil_m_in] - a[c.oil_m_out]
+    if nv >= 4:
+        liq = a[c.oil_m_in] - a[c.oil_m_out] - evap
         liq_through = max(abs(a[c.oil_m_in]), m_ref * 1e-3)
         mass_closure = max(mass_closure, abs(liq) / liq_through)
         cons_m = max(cons_m, abs(y_end[2 * n:3 * n].sum() - y_start[2 * n:3 * n].sum() - liq)
                      / liq_through)
+    if nv == 5:
+        vap = a[c.vap_in] - a[c.vap_out] + evap
+        mass_closure = max(mass_closure, abs(vap) / throughput)
+        cons_m = max(cons_m, abs(y_end[4 * n:5 * n].sum() - y_start[4 * n:5 * n].sum() - vap)
+                     / throughput)
     energy_closure = abs(e_in - e_out) / work
     cons_e = abs((stored_e1 - stored_e0) - (e_in - e_out)) / work
     return mass_closure, energy_closure, cons_m, cons_e
@@ -336,7 +343,9 @@ def _plausible(model, z) -> bool:
     m = z[1:n][live]
     if not np.all(np.isfinite(z)) or np.any(m <= 0):
         return False
-    if model.oil and np.any(z[2 * n:4 * n] < 0):
+    # masses only: the liquid's energy counts from its inlet temperature, below which an
+    # evaporating or gas-cooled liquid may fall
+    if model.oil and (np.any(z[2 * n:3 * n] < 0) or np.any(z[4 * n:model.nv * n] < 0)):
         return False
     V = model.geo.volume(ages[live])
     if model.inv_rho_liquid:

@@ -14,7 +14,7 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from . import liquid
+from . import humid, liquid
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_M_DIS, ACC_M_SUC, ACC_W
 
 
@@ -34,11 +34,15 @@ def apply_event(model, kind: str, k: int, theta: float, y: np.ndarray) -> None:
         if model.oil:
             y[:, 2 * n + k] = 0.0
             y[:, 3 * n + k] = 0.0
+        if model.vapour:
+            humid.born(model, k, m, y, acc)
     elif kind == "death":
         m = y[:, k].copy()
         U = y[:, n + k].copy()
         Vg = _gas_volume(model, V, y, k)
-        p, _, _ = model.fluid.props(m / Vg, U / m)
+        p, _, _ = model.fluid.props(m / Vg, U / m, *_fraction(model, y, k, m))
+        if model.vapour:
+            humid.delivered(model, k, y, acc)
         acc[:, ACC_M_DIS] += m
         acc[:, ACC_H_DIS] += U + p * Vg
         acc[:, ACC_W] += p * V
@@ -57,7 +61,13 @@ def apply_event(model, kind: str, k: int, theta: float, y: np.ndarray) -> None:
         y[:, 2 * n + k] += mo
         acc[:, c.oil_m_in] += mo
     elif kind == "open" and model.ports.model == "ideal":
-        _equalise(model, k, _gas_volume(model, V, y, k), y, acc)
+        equalise = humid.equalise if model.vapour else _equalise
+        equalise(model, k, _gas_volume(model, V, y, k), y, acc)
+
+
+def _fraction(model, y, k, m) -> tuple:
+    """(w,) of slot k's gas with a volatile liquid's vapour (:mod:`.humid`), else ()."""
+    return (y[:, humid.BLOCK * model.n + k] / m,) if model.vapour else ()
 
 
 def _gas_volume(model, V, y, k):
@@ -125,9 +135,12 @@ def initial_state(model) -> np.ndarray:
         else:  # any working port keeps the chamber near the discharge pressure
             p = model.dis.p
             rho = model.suc.rho * (p / model.suc.p) ** (1.0 / kap)
-        u = fl.u_from_rho_p(rho, p)
+        w = (model.suc.w,) if model.vapour else ()
+        u = fl.u_from_rho_p(rho, p, *w)
         y[k] = rho * Vg
         y[n + k] = rho * Vg * u
+        if model.vapour:
+            y[humid.BLOCK * n + k] = rho * Vg * model.suc.w
     return y
 
 

@@ -55,6 +55,9 @@ def make_fluid(op: Operating, volume_ratio: float):
     if q is not None and op.oil_mass_ratio > 0:  # flooded_discharge_T assumes a gas
         raise CaseError("key 'suction_quality' in [operating]: a wet suction with oil "
                         "injected (oil_mass_ratio) is not modelled")
+    if op.liquid_volatile is not None:
+        from .vapour import humid_gas
+        return humid_gas(op.constant_cp_gas if op.perfect_gas else dry_air(), op)
     if op.perfect_gas:
         return op.constant_cp_gas
     if op.fluid == "air":

@@ -117,7 +117,13 @@ def fill_at_close(model, k: int, V: float, y: np.ndarray, acc: np.ndarray) -> No
     beta = op.gas_volume_fraction
     m, U, mo = y[:, k].copy(), y[:, n + k].copy(), y[:, 2 * n + k]
     Vg = gas_volume(V, mo, inv)
-    p = model.fluid.props(m / Vg, U / m)[0]
+    if model.vapour:  # the gas displaced takes its vapour with it (.humid)
+        mv = y[:, 4 * n + k].copy()
+        p = model.fluid.props(m / Vg, U / m, mv / m)[0]
+        y[:, 4 * n + k] = beta * mv
+        acc[:, c.vap_in] -= (1.0 - beta) * mv
+    else:
+        p = model.fluid.props(m / Vg, U / m)[0]
     y[:, k] = beta * m
     y[:, n + k] = beta * U
     acc[:, ACC_M_SUC] -= (1.0 - beta) * m
@@ -155,11 +161,39 @@ def parse_keys(d: dict, s: str, where: str) -> dict:
             raise CaseError(f"give gas_volume_fraction or oil_mass_ratio in [{s}] of {where}, "
                             "not both (one liquid per case)")
     out["gas_volume_fraction"] = beta
+    out.update(_volatile_keys(d, s, where, beta))
     if "liquid_cp_J_kgK" in d:
         if "oil_cp_J_kgK" in d:
             raise CaseError(f"give liquid_cp_J_kgK or oil_cp_J_kgK in [{s}] of {where}, "
                             "not both (one liquid per case)")
         out["cp"] = _number(d, "liquid_cp_J_kgK", s, where, positive=True)
+    return out
+
+
+def _volatile_keys(d: dict, s: str, where: str, beta: float) -> dict:
+    """liquid_volatile (the liquid's CoolProp name: its vapour in the gas, :mod:`.vapour`),
+    the suction gas's relative humidity in [0, 1] and the Lewis number; a volatile liquid
+    is drawn in (gas_volume_fraction < 1) or injected (oil_mass_ratio)."""
+    out = {}
+    name = d.get("liquid_volatile")
+    if name is None:
+        extra = [k for k in ("suction_relative_humidity", "lewis_number") if k in d]
+        if extra:
+            raise CaseError(f"key '{extra[0]}' in [{s}] of {where} needs liquid_volatile")
+        return out
+    if not isinstance(name, str) or not name:
+        raise CaseError(f"key 'liquid_volatile' in [{s}] of {where} must name a CoolProp "
+                        f"fluid, got {name!r}")
+    if beta == 1.0 and not d.get("oil_mass_ratio", 0.0):
+        raise CaseError(f"liquid_volatile in [{s}] of {where} needs a liquid: "
+                        "gas_volume_fraction < 1 or oil_mass_ratio > 0")
+    rh = _number(d, "suction_relative_humidity", s, where, 1.0, nonnegative=True)
+    if rh > 1.0:
+        raise CaseError(f"key 'suction_relative_humidity' in [{s}] of {where} must be in "
+                        f"[0, 1], got {rh}")
+    out["liquid_volatile"] = name
+    out["suction_relative_humidity"] = rh
+    out["lewis_number"] = _number(d, "lewis_number", s, where, 1.0, positive=True)
     return out
 
 

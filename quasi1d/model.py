@@ -42,7 +42,7 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from . import events, flows, kernel, liquid
+from . import events, flows, humid, kernel, liquid
 from .chamber import ChamberGeometry
 from .heat import WALL_AREA_FACTOR, WallHeat, wall_heat
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_Q, ACC_W, AccColumns, Segment, segments
@@ -71,7 +71,7 @@ class ChamberModel:
     suc: Plenum
     dis: Plenum
     n: int  # slots
-    nv: int  # state variables per slot: 2 (m, U) or 4 (with oil mass and enthalpy)
+    nv: int  # state variables per slot: 2 (m, U), 4 (with oil mass and enthalpy), 5 (vapour)
     laws: tuple  # paths.PathLaw of every declared leakage path
     acc_cols: AccColumns
     segments: tuple
@@ -94,7 +94,12 @@ class ChamberModel:
 
     @property
     def oil(self) -> bool:
-        return self.nv == 4
+        return self.nv >= 4
+
+    @property
+    def vapour(self) -> bool:
+        """A volatile liquid's vapour rides in a fifth block (:mod:`.humid`)."""
+        return self.nv == 5
 
     @property
     def liquid_datum_K(self) -> float:
@@ -122,6 +127,8 @@ class ChamberModel:
         if self.oil:
             s[2 * n:3 * n] = self.m_ref * max(self.liquid_ratio, 1e-3)
             s[3 * n:4 * n] = s[2 * n:3 * n] * self.op.oil_cp_J_kgK * self.op.oil_temperature_K
+        if self.vapour:
+            s[4 * n:5 * n] = self.m_ref * max(self.suc.w, 1e-3)
         a = s[self.nv * n:]
         a[:] = self.m_ref
         a[[ACC_H_SUC, ACC_H_DIS]] = self.m_ref * abs(self.suc.h) + self.e_ref
@@ -212,7 +219,8 @@ class ChamberModel:
         inv = self.inv_rho_liquid  # a liquid's volume leaves the gas V - mo / rho_l
         rho = m / liquid.gas_volume(g[0], y[:, 2 * n:2 * n + na], inv) if inv else m * iV
         u = y[:, n:n + na] / m
-        p, T, kap = fl.props(rho, u)
+        w = humid.fractions(self, y, m, na) if self.vapour else None
+        p, T, kap = fl.props(rho, u) if w is None else fl.props(rho, u, w)
         h = u * fl.gamma if self.ideal_gas else u + p / rho
         R = kernel.nodes(rho, suc.rho, dis.rho)
         fwd, x, p1, r1 = kernel.upstream(kernel.nodes(p, suc.p, dis.p), R, seg.ia, seg.ib)
@@ -247,7 +255,7 @@ class ChamberModel:
             F[:, seg.cou] -= cou * R[:, seg.cou_older]
         H = kernel.nodes(h, suc.h, dis.h)  # the walls may carry flow against the pressure
         E = kernel.enthalpy_flows(F, H[:, seg.ia], H[:, seg.ib])
-        return F, E, g, m, rho, u, p, T, h, *oil_flows
+        return F, E, g, m, rho, u, p, T, h, w, *oil_flows
 
     def _drag_ratios(self, grp, x, fwd, r1, p1, ra, rb):
         """Wall speed ratios V = U sqrt(rho / p) along the flows of a calibrated group and
@@ -280,7 +288,7 @@ class ChamberModel:
                              self.op.wall_temperature_K, self.inv_omega,
                              self.geo.omega_outer, IDEAL_PORT_RELAXATION_RAD, *args)
         n, na = self.n, seg.n_act
-        F, E, g, m, rho, u, p, T, h, Fo, Eo = self._flows(theta, y, seg)
+        F, E, g, m, rho, u, p, T, h, w_v, Fo, Eo = self._flows(theta, y, seg)
         V, dV, Vt, wall = g[0], g[2], g[3], g[6]
         w = self.inv_omega
         acc0 = self.nv * n
@@ -296,8 +304,13 @@ class ChamberModel:
             dy[:, n:n + na] += q * w
         if Fo is not None:
             oil_leak_balances(seg, dy, Fo, Eo)
+        if self.vapour:
+            humid.flows_and_evaporation(self, seg, dy, F, y, m, rho, w_v, p)
         xs = None
-        if seg.ideal.size:
+        if seg.ideal.size and self.vapour:
+            xs = humid.ideal_ports(self, seg, dy, pdV, g, y, m, rho, u, p, h, w_v,
+                                   IDEAL_PORT_RELAXATION_RAD)
+        elif seg.ideal.size:
             gamma, pr, pu = (self.fluid.gamma, p, p) if self.ideal_gas else (
                 0.0, *self.fluid.dp(rho, u))
             V, Vt, kl = liquid.port_volumes(self, y, dy, V, Vt, m, na) \
@@ -364,7 +377,8 @@ class ChamberModel:
         inv = self.inv_rho_liquid
         Vg = liquid.gas_volume(V, y[..., 2 * n:3 * n], inv) if inv else V
         with np.errstate(invalid="ignore", divide="ignore"):
-            p, T, _ = self.fluid.props(m / Vg, U / m)
+            p, T, _ = self.fluid.props(m / Vg, U / m, *(
+                (y[..., humid.BLOCK * n:(humid.BLOCK + 1) * n] / m,) if self.vapour else ()))
         return ages, V, np.asarray(p, float), np.asarray(T, float), m
 
     # -- events and the cycle's states (see .events) -----------------------------------
@@ -403,9 +417,10 @@ def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Port
         raise CaseError(f"leakage mixture {leak.mixture!r} is not one of "
                         f"{', '.join(Leakage.MIXTURES)}")
     n = geo.slots
-    nv = 4 if ratio > 0 else 2
+    nv = (5 if op.liquid_volatile else 4) if ratio > 0 else 2
     laws = resolve(geo.paths, leak)
-    acc = AccColumns.of(laws, oil_leaks=nv == 4 and leak.mixture == "homogeneous")
+    acc = AccColumns.of(laws, oil_leaks=nv >= 4 and leak.mixture == "homogeneous",
+                        vapour=nv == 5)
     segs = tuple(segments(geo, laws, acc, nv, n, ports, suc, dis))
     return ChamberModel(geo, fluid, op, leak, ports, suc, dis, n, nv, laws, acc, segs,
                         suc.rho * geo.v_max, op.p_suction_Pa * geo.v_max,

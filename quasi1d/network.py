@@ -48,6 +48,7 @@ class AccColumns:
 
     leak_keys: tuple[str, ...]
     oil_leaks: bool = False
+    vapour: bool = False  # a volatile liquid's vapour in, out and evaporated (.humid)
 
     def leak(self, key: str) -> int:
         return ACC_Q + 1 + self.leak_keys.index(key)
@@ -74,12 +75,25 @@ class AccColumns:
         return self.oil_m_in + 3
 
     @property
-    def size(self) -> int:
+    def vap_in(self) -> int:
         return self.oil_m_in + 4 + (len(self.leak_keys) if self.oil_leaks else 0)
 
+    @property
+    def vap_out(self) -> int:
+        return self.vap_in + 1
+
+    @property
+    def evaporated(self) -> int:
+        return self.vap_in + 2
+
+    @property
+    def size(self) -> int:
+        return self.vap_in + (3 if self.vapour else 0)
+
     @classmethod
-    def of(cls, laws, oil_leaks: bool = False) -> AccColumns:
-        return cls(tuple(dict.fromkeys(law.path.report_key for law in laws)), oil_leaks)
+    def of(cls, laws, oil_leaks: bool = False, vapour: bool = False) -> AccColumns:
+        return cls(tuple(dict.fromkeys(law.path.report_key for law in laws)), oil_leaks,
+                   vapour)
 
 
 @dataclass(frozen=True)

@@ -27,6 +27,9 @@ Definitions (per lobe period = one chamber's cycle, t_P = period / omega_outer):
     oil_flow_kg_s               net oil supplied: injected at suction closing, less what
                                 leaks into the suction plenum (over a periodic cycle the
                                 oil delivered)
+    evaporated_kg_s             (a volatile liquid, :mod:`.humid`) the liquid evaporated
+                                into the gas, net (negative: the vapour condensed)
+    discharge_vapour_fraction   the delivered gas's vapour mass fraction
     oil_leakage_kg_s            gross oil flow per report key, as leakage_kg_s: the oil
                                 that leaks with the gas as a homogeneous mixture
                                 ([leakage] mixture, :mod:`.oil`); 0 where the leakage
@@ -56,8 +59,11 @@ def figures(sol: CycleSolution) -> dict:
     wet = suction_given(op)  # a wet suction's quality (real fluids)
     w_is = fl.work_isentropic(op.p_suction_Pa, op.T_suction_K, op.p_discharge_Pa, **wet)
     w_it = fl.work_isothermal(op.p_suction_Pa, op.T_suction_K, op.p_discharge_Pa, **wet)
+    # the delivered gas's composition, with a volatile liquid's vapour (.humid)
+    w_dis = (a[model.acc_cols.vap_out] / a[ACC_M_DIS],) if model.vapour and a[ACC_M_DIS] > 0 \
+        else ()
     if a[ACC_M_DIS] > 0:
-        T_dis = float(fl.T_ph(op.p_discharge_Pa, a[ACC_H_DIS] / a[ACC_M_DIS]))
+        T_dis = float(fl.T_ph(op.p_discharge_Pa, a[ACC_H_DIS] / a[ACC_M_DIS], *w_dis))
     else:
         T_dis = None
 
@@ -73,7 +79,7 @@ def figures(sol: CycleSolution) -> dict:
         "adiabatic_efficiency": ratio(mdot * w_is, power),
         "isothermal_efficiency": None if w_it is None else ratio(mdot * w_it, power),
         "discharge_temperature_K": T_dis,
-        "discharge_mixture_temperature_K": _mixture_T(model, a, T_dis),
+        "discharge_mixture_temperature_K": _mixture_T(model, a, T_dis, w_dis),
         "heat_to_gas_W": float(a[ACC_Q] / t_period),
         "oil_flow_kg_s": float(a[model.acc_cols.oil_m_in] / t_period),
         "leakage_kg_s": {key: float(a[model.acc_cols.leak(key)] / t_period)
@@ -90,6 +96,10 @@ def figures(sol: CycleSolution) -> dict:
         "discharge_open_deg": math.degrees(geo.discharge_open),
         "fluid": op.fluid,
     }
+    if model.vapour:
+        c = model.acc_cols
+        out["evaporated_kg_s"] = float(a[c.evaporated] / t_period)
+        out["discharge_vapour_fraction"] = float(w_dis[0]) if w_dis else None
     if not sol.converged:
         out["message"] = sol.message
     return out
@@ -101,15 +111,15 @@ def _oil_leakage(model, a, t_period) -> dict:
             for key in c.leak_keys}
 
 
-def _mixture_T(model, a, T_gas):
+def _mixture_T(model, a, T_gas, w=()):
     """Delivered gas (at T_gas, cp from the fluid) and oil (its delivered enthalpy,
     c_oil T) brought to one temperature by their heat balance."""
     op, c = model.op, model.acc_cols
     if not model.oil or T_gas is None or a[c.oil_m_out] <= 0 or a[ACC_M_DIS] <= 0:
         return None
     fl = model.fluid
-    h_lo = fl.state_pT(op.p_discharge_Pa, T_gas - 0.5)[2]
-    h_hi = fl.state_pT(op.p_discharge_Pa, T_gas + 0.5)[2]
+    h_lo = fl.state_pT(op.p_discharge_Pa, T_gas - 0.5, *w)[2]
+    h_hi = fl.state_pT(op.p_discharge_Pa, T_gas + 0.5, *w)[2]
     cg = float(h_hi - h_lo) * a[ACC_M_DIS]
     co = op.oil_cp_J_kgK * a[c.oil_m_out]
     # the delivered liquid's enthalpy, less its p v (at the discharge pressure), over c

@@ -26,11 +26,15 @@ class Plenum:
     u: float
     h: float
     kappa: float
+    w: float = 0.0  # the vapour's mass fraction in the gas (a volatile liquid, .humid)
 
 
 def plenums(fluid, op: Operating) -> tuple[Plenum, Plenum]:
     """(suction, discharge) plenums of an operating point: the suction state, and the
     discharge pressure holding what flows back from it (see below)."""
+    if getattr(fluid, "vapour", None) is not None:
+        from .humid import humid_plenums
+        return humid_plenums(fluid, op)
     def plenum(p, T, **given):  # given: q or h of a two-phase real-fluid state
         rho, u, h = fluid.state_pT(p, T, **given)
         k = fluid.props(np.array([rho]), np.array([u]))[2]

@@ -105,6 +105,9 @@ class Operating:
     # below 1 the liquid, of heat capacity oil_cp_J_kgK, is drawn in with the gas).
     liquid_density_kg_m3: float | None = None
     gas_volume_fraction: float = 1.0
+    liquid_volatile: str | None = None  # a volatile liquid's CoolProp name (.vapour)
+    suction_relative_humidity: float = 1.0
+    lewis_number: float = 1.0
 
     KEYS = (
         "p_suction_bar", "p_discharge_bar", "T_suction_K", "speed_rpm", "fluid",
@@ -112,7 +115,8 @@ class Operating:
         "discharge_early_opening_deg", "heat_transfer_W_m2K", "heat_transfer_correlation",
         "heat_capacity", "molar_mass_g_mol", "cp_J_kgK",
         "oil_mass_ratio", "T_oil_K", "oil_cp_J_kgK", "oil_time_constant_ms", "suction_quality",
-        "liquid_density_kg_m3", "gas_volume_fraction", "liquid_cp_J_kgK",
+        "liquid_density_kg_m3", "gas_volume_fraction", "liquid_cp_J_kgK", "liquid_volatile",
+        "suction_relative_humidity", "lewis_number",
         "driven",  # a geometry key that the case file keeps in [operating]; not used here
         "discharge_port",  # a geometry key too: the chamber table's area_hp holds the ports
     )

@@ -24,6 +24,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from .integrate import IntegrationError, OverTime, PeriodRun, integrate_period
 from .model import ChamberModel
@@ -160,7 +161,12 @@ def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolut
     cpu = time.process_time()
     model.fast["kernel"] = compiled.kernel_for_point()  # None: numpy (see .compiled)
     try:
-        return _solve(model, num, record)
+        # The flow maps' products are small (batch x flows x states, ~40 000 products):
+        # OpenBLAS splits them over threads once they cross its size threshold, which
+        # cost the multiphase pump with a volatile water twice its time (67 against 36
+        # s) on 2 cores; one thread is as fast below it.
+        with threadpool_limits(limits=1, user_api="blas"):
+            return _solve(model, num, record)
     finally:
         compiled.note_work(time.process_time() - cpu)
 

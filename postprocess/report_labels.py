@@ -117,6 +117,8 @@ QUASI1D = {
     "discharge_mixture_temperature_K": ("Discharge temperature, gas and oil mixed", "K"),
     "heat_to_gas_W": ("Heat to the gas", "W"),
     "oil_flow_kg_s": ("Oil flow delivered", "kg/s"),
+    "evaporated_kg_s": ("Liquid evaporated into the gas, net (negative: condensed)", "kg/s"),
+    "discharge_vapour_fraction": ("Vapour mass fraction of the delivered gas", "fraction"),
     "cycles": ("Cycles computed", ""),
     "converged": ("Cycle converged", ""),
     "mass_balance_error": ("Mass balance error (relative)", ""),
@@ -134,6 +136,8 @@ QUASI1D = {
     "loads.power_balance_error": ("Gas-load power balance error (relative)", ""),
     "mechanical.bearing_bore_m": ("Bearing bore", "m"),
     "mechanical.seal_loss_W": ("Seal loss", "W"),
+    "mechanical.liquid_acceleration_W": ("Work of turning the liquid up to the rotors' speed",
+                                         "W"),
     "mechanical.not_modelled": ("Not modelled", ""),
 }
 

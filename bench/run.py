@@ -15,6 +15,7 @@ MODULES = (
     "bench.bench_quasi1d",
     "bench.bench_pdsim",
     "bench.bench_real_fluid",
+    "bench.bench_humid",
     "bench.bench_solids",
     "bench.bench_cfd",
     "bench.bench_cfd3d",

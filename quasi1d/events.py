@@ -120,6 +120,10 @@ def initial_state(model) -> np.ndarray:
         V = Vg = float(geo.volume(age))
         if model.oil and age >= geo.suction_close:
             ml = model.liquid_ratio * m_trap
+            if age >= geo.discharge_open:
+                # gas and liquid leave together: a discharging chamber keeps its share of
+                # liquid (its whole trapped liquid would lock a small chamber near death)
+                ml *= V / float(geo.volume(geo.discharge_open))
             y[2 * n + k] = ml
             y[3 * n + k] = 0.0  # at the inlet temperature, the liquid's energy datum
             Vg = V - ml * model.inv_rho_liquid

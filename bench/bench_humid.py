@@ -21,7 +21,6 @@ Output: bench/results/humid_stress.csv.
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
@@ -34,7 +33,7 @@ from rotorflow.quasi1d.model import build
 from rotorflow.quasi1d.result import make_result
 from rotorflow.quasi1d.synthetic import scaled_table
 
-from .bench_quasi1d import _write_csv, classify
+from .bench_quasi1d import _write_csv, attempt, classify
 from .bench_real_fluid import _defects, _logu
 
 POINTS = 60
@@ -88,20 +87,18 @@ def _liquid_defects(res) -> list[str]:
 
 def run_point(pt: dict) -> dict:
     out = dict(pt)
-    t0 = time.perf_counter()
-    try:
+
+    def run():
         op = _operating(pt)
         table = scaled_table(pt["v_max_m3"], pt["lobes"])
         geo = prepare(table, op.volume_ratio, None, None, op.speed_rpm, NUMERICS.vanish_fraction)
         leak = Leakage(gap_m=pt["gap_um"] * 1e-6, model="nozzle", coefficient=1.0)
-        model = build(geo, make_fluid(op, geo.v_max / geo.v_discharge), op, leak,
-                      Ports("ideal"))
-        res = make_result(solve(model, NUMERICS))
-    except Exception as e:  # a failure is recorded, with its message, not raised
-        out.update(status="error", message=f"{type(e).__name__}: {e}".splitlines()[0],
-                   time_s=time.perf_counter() - t0)
+        return make_result(solve(build(geo, make_fluid(op, geo.v_max / geo.v_discharge), op,
+                                       leak, Ports("ideal")), NUMERICS))
+
+    res = attempt(out, run)
+    if res is None:
         return out
-    out["time_s"] = time.perf_counter() - t0
     f = res.figures
     out.update(cycles=f["cycles"], volumetric_efficiency=f["volumetric_efficiency"],
                indicated_power_W=f["indicated_power_W"],

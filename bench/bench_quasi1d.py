@@ -111,6 +111,20 @@ def stress_point(rng: np.random.Generator) -> dict:
     }
 
 
+def attempt(out: dict, run):
+    """run()'s result, its wall time in out["time_s"]; None where it raised, the failure
+    recorded in ``out`` (status "error" and the message's first line), not raised."""
+    t0 = time.perf_counter()
+    try:
+        res = run()
+    except Exception as e:
+        out.update(status="error", message=f"{type(e).__name__}: {e}".splitlines()[0],
+                   time_s=time.perf_counter() - t0)
+        return None
+    out["time_s"] = time.perf_counter() - t0
+    return res
+
+
 def run_stress_point(pt: dict, numerics: Numerics | None = None) -> dict:
     """Simulate one stress point; classify the outcome."""
     table = scaled_table(pt["v_max_m3"], pt["lobes"])
@@ -121,14 +135,10 @@ def run_stress_point(pt: dict, numerics: Numerics | None = None) -> dict:
         "volume_ratio": pt["volume_ratio"]}, "stress")
     leak = Leakage(gap_m=pt["gap_um"] * 1e-6, model="nozzle", coefficient=1.0)
     out = dict(pt)
-    t0 = time.perf_counter()
-    try:
-        res = simulate(table, op, leak, Ports("ideal"), numerics or Numerics(max_cycles=30))
-    except Exception as e:  # a failure is recorded, with its message, not raised
-        out.update(status="error", message=f"{type(e).__name__}: {e}".splitlines()[0],
-                   time_s=time.perf_counter() - t0)
+    res = attempt(out, lambda: simulate(table, op, leak, Ports("ideal"),
+                                        numerics or Numerics(max_cycles=30)))
+    if res is None:
         return out
-    out["time_s"] = time.perf_counter() - t0
     f = res.figures
     c = res.chamber
     bad = []

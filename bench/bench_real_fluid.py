@@ -50,7 +50,7 @@ from rotorflow.quasi1d.model import build
 from rotorflow.quasi1d.result import make_result
 from rotorflow.quasi1d.synthetic import scaled_table
 
-from .bench_quasi1d import _write_csv, classify
+from .bench_quasi1d import _write_csv, attempt, classify
 
 # evaporating temperature range (C) and discharge-pressure cap (bar) of each fluid
 FLUIDS = {"R134a": (-20.0, 15.0, None), "R290": (-25.0, 10.0, None),
@@ -162,18 +162,17 @@ def _defects(res) -> list[str]:
 def run_point(pt: dict, fluid) -> dict:
     """Simulate one point on the shared table ``fluid``; classify the outcome."""
     out = dict(pt)
-    t0 = time.perf_counter()
-    try:
+
+    def run():
         op = _operating(pt)
         table = scaled_table(pt["v_max_m3"], pt["lobes"])
         geo = prepare(table, op.volume_ratio, None, None, op.speed_rpm,
                       NUMERICS.vanish_fraction)
-        res = make_result(solve(build(geo, fluid, op, _leak(pt), Ports("ideal")), NUMERICS))
-    except Exception as e:  # a failure is recorded, with its message, not raised
-        out.update(status="error", message=f"{type(e).__name__}: {e}".splitlines()[0],
-                   time_s=time.perf_counter() - t0)
+        return make_result(solve(build(geo, fluid, op, _leak(pt), Ports("ideal")), NUMERICS))
+
+    res = attempt(out, run)
+    if res is None:
         return out
-    out["time_s"] = time.perf_counter() - t0
     f = res.figures
     bad = _defects(res)
     out.update(cycles=f["cycles"], mass_flow_kg_s=f["mass_flow_kg_s"],

@@ -76,6 +76,9 @@ REFINE = ()
 #: twin screw's grown rotors' overlap, comes out of Clipper as a string of specks, not
 #: as the sliver; the sliver's passage is then swept from its birth rigidly.
 THIN = 1e-5
+import os
+CONTACTS = os.environ.get("CT", "1") == "1"
+CONTACT_REACH = 1e-2
 
 
 @dataclass(frozen=True)
@@ -103,7 +106,9 @@ class Sweeper(Events):
     def sample(self, psi: float) -> Sample | None:
         from manifold3d import CrossSection, FillRule
 
-        polys = [np.ascontiguousarray(q) for q in self.section_at(psi) if len(q) >= 3]
+        contacts = [] if CONTACTS else None
+        polys = [np.ascontiguousarray(q) for q in self.section_at(psi, contacts)
+                 if len(q) >= 3]
         if self.crop is not None:  # (most of a chamber's life lies outside the crop)
             polys = [q for q in polys if self._near_crop(q)]
         if not polys:
@@ -122,7 +127,8 @@ class Sweeper(Events):
             i = len(rings)
             cls, par = self.surfaces.classify(ring, psi)
             rings.append((ring, cls))
-            chains += surface_chains(ring, cls, par, self.periods, i)
+            chains += surface_chains(ring, cls, par, self.periods, i,
+                                     contacts, CONTACT_REACH * self.surfaces.size)
         return Sample(psi, region, tuple(rings), tuple(chains))
 
     def _near_crop(self, q) -> bool:

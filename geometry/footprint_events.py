@@ -53,6 +53,12 @@ TURN_AREA = 1e-7
 #: in the steps before and after, and by more than JUMP_MIN of the profile's parameter
 #: (a profile segment spans 1), jumped (:meth:`Events._jumps`).
 JUMP = 4.0
+import os
+TRUE_CLOSING = os.environ.get("TC", "1") == "1"
+TOUCH_SCAN = 16
+TOUCH_REACH = 0.05
+ON_ROTOR_DEPTH = 2e-5
+TOUCH_BISECT = 12
 JUMP_MIN = 0.05
 
 
@@ -256,9 +262,63 @@ class Events:
             mid = 0.5 * (lo + hi)
             open_ = self._gaps_each(ring, cls, rotor, x[pick], mid, orient) > 0.0
             lo, hi = np.where(open_, mid, lo), np.where(open_, hi, mid)
-        own = np.interp(np.arange(n), pick[hit], (0.5 * (lo + hi))[hit])
+        at = 0.5 * (lo + hi)
+        use = hit
+        if TRUE_CLOSING:
+            at, touched = self._touching(ring, cls, rotor, x[pick], at, ds[1] - ds[0], orient)
+            if (hit & touched).any():
+                use = hit & touched
+        own = np.interp(np.arange(n), pick[use], at[use])
         found = np.interp(np.arange(n), pick, hit.astype(float)) > 0.5
         return own, found
+
+    def _touching(self, ring, cls, rotor, x, at, step, orient):
+        """Per point: where the true surfaces touch, from ``at``, where its grown gap
+        closes (moving by ``step``'s sign): the middle between that and where the gap
+        opens again beyond it (an overlap of the grown rotors, never deeper than
+        ON_ROTOR_DEPTH, within TOUCH_REACH); ``at`` where it does not open again."""
+        n = len(x)
+        sign = math.copysign(1.0, step)
+        q = np.full(n, abs(step) / TOUCH_SCAN)
+        start = at.copy()
+        found = np.zeros(n, dtype=bool)
+        lo, hi = at.copy(), at.copy()
+        todo = np.ones(n, dtype=bool)
+        k = np.arange(1, TOUCH_SCAN + 1)
+        deep = -ON_ROTOR_DEPTH * self.surfaces.size
+        while todo.any():
+            w = np.nonzero(todo)[0]
+            ds = start[w][None, :] + sign * q[w][None, :] * k[:, None]
+            g = self._gaps_each(ring, cls, rotor, np.tile(x[w], (len(k), 1)), ds.ravel(),
+                                orient).reshape(len(k), len(w))
+            opened = g > 0.0
+            again = opened.any(axis=0)
+            first = np.argmax(opened, axis=0)
+            before = np.arange(len(k))[:, None] < np.where(again, first, len(k))[None, :]
+            through = ((g <= deep) & before).any(axis=0)
+            got = again & ~through
+            u = np.arange(len(w))
+            found[w[got]] = True
+            lo[w[got]] = np.where(first > 0, ds[np.maximum(first - 1, 0), u], start[w])[got]
+            hi[w[got]] = ds[first, u][got]
+            on = ~again & ~through & (np.abs(ds[-1] - at[w]) < TOUCH_REACH)
+            todo[:] = False
+            todo[w[on]] = True
+            start[w[on]] = ds[-1][on]
+            q[w[on]] *= 2.0
+        out = at.copy()
+        if not found.any():
+            return out, found
+        f = np.nonzero(found)[0]
+        a, b = lo[f], hi[f]
+        for _ in range(TOUCH_BISECT):
+            mid = 0.5 * (a + b)
+            open_ = self._gaps_each(ring, cls, rotor, x[f], mid, orient) > 0.0
+            a, b = np.where(open_, a, mid), np.where(open_, mid, b)
+        out[f] = 0.5 * (at[f] + 0.5 * (a + b))
+        if os.environ.get("DBG"):
+            print("touch", n, len(f), "step %.2e" % step, "shift", np.round(np.median(np.abs(out - at)), 5))
+        return out, found
 
     def _births(self, ring, cls, chain, dpsi, reach) -> np.ndarray:
         """Per vertex of ``chain`` (a piece of a sliver found born or dying |dpsi| away,

@@ -91,11 +91,14 @@ def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray,
     h = float(sec.psi[1] - sec.psi[0]) if steps is None else machine.period / steps
     memo = {}
 
-    def section_at(psi):  # each planar section serves both faces
+    def section_at(psi, contacts=None):  # each planar section serves both faces
         key = round(psi / EPS_AGE)
-        if key not in memo:
-            memo[key] = [q for q in _section(machine, psi) if len(q) >= 3]
-        return memo[key]
+        if key not in memo or (contacts is not None and memo[key][1] is None):
+            found = None if contacts is None else []
+            memo[key] = ([q for q in _section(machine, psi, found) if len(q) >= 3], found)
+        if contacts is not None:
+            contacts.extend(memo[key][1])
+        return memo[key][0]
 
     sweeper = Sweeper(Surfaces(machine.pair), section_at, *crop_region(machine.pair))
     ages = np.asarray(ages, dtype=float)

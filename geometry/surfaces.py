@@ -157,7 +157,7 @@ def area(ring) -> float:
     return 0.5 * float(np.sum(x * np.roll(y, -1) - y * np.roll(x, -1)))
 
 
-def chains(ring, cls, par, periods, index) -> list[Chain]:
+def chains(ring, cls, par, periods, index, contacts=None, reach=0.0) -> list[Chain]:
     """The runs of ``ring``'s vertices on one rotor (``cls``: :meth:`Surfaces.classify`),
     each a :class:`Chain` of ring ``index``; ``periods``: each profile's parameter range."""
     m = len(ring)
@@ -177,9 +177,29 @@ def chains(ring, cls, par, periods, index) -> list[Chain]:
         steps = np.remainder(np.diff(par[r]) + 0.5 * n, n) - 0.5 * n
         s = par[r[0]] + np.concatenate([[0.0], np.cumsum(steps)])
         pts = ring[r]
+        if contacts:
+            pts, s = _to_contacts(pts, s, cls[(r[0] - 1) % m], cls[(r[-1] + 1) % m], k,
+                                  np.asarray(contacts, dtype=float), reach)
         if s[-1] < s[0]:
             s, pts = s[::-1], pts[::-1]
         out.append(Chain(k, pts, float(s[0]), float(s[-1]), index, s))
     return out
 
 
+
+
+def _to_contacts(pts, s, before, after, k, contacts, reach):
+    """A run's points and parameters, each end that meets the other rotor's run carried
+    on to the nearest of ``contacts`` within ``reach``."""
+    for end, nb in ((0, before), (-1, after)):
+        if nb < 0 or nb == k:
+            continue
+        d = np.linalg.norm(contacts - pts[end], axis=1)
+        j = int(np.argmin(d))
+        if d[j] >= reach or d[j] == 0.0:
+            continue
+        if end == 0:
+            pts, s = np.vstack([contacts[j], pts]), np.r_[s[0], s]
+        else:
+            pts, s = np.vstack([pts, contacts[j]]), np.r_[s, s[-1]]
+    return pts, s

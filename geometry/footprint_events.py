@@ -59,6 +59,10 @@ TOUCH_SCAN = 16
 TOUCH_REACH = 0.05
 ON_ROTOR_DEPTH = 2e-5
 TOUCH_BISECT = 12
+BIRTH_JUMP = 1.0 / 16.0
+BIRTH_ROUNDS = int(os.environ.get('BR', '5'))
+FIX_ENDS = os.environ.get('FE', '1') == '1'
+TOUCHED_ONLY = os.environ.get('TO', '1') == '1'
 JUMP_MIN = 0.05
 
 
@@ -242,35 +246,60 @@ class Events:
         band = ring_section(np.concatenate([pts[found], moved[::-1]]))
         return [] if band is None else [band]
 
-    def _closing(self, ring, cls, rotor, x, span):
+    def _closing(self, ring, cls, rotor, x, span, fixed=()):
         """Per point of ``x`` (rotor ``rotor``'s, on ``ring``): the rigid move (signed,
         within ``span``) to where its gap to the ring's other edges closes, and whether
-        it closes there.  Found on GAP_POINTS of them, scanned and bisected; the rest
-        interpolated along x."""
+        it closes there.  Found on GAP_POINTS of them, and between two of those whose
+        moves differ by more than BIRTH_JUMP of ``span`` on the point halfway, up to
+        BIRTH_ROUNDS times (a sliver born along an arc at once opens at its ends as a
+        zipper: the moves change fast there); the rest interpolated along x."""
         orient = 1.0 if _area(ring) > 0.0 else -1.0
         n = len(x)
         pick = np.unique(np.linspace(0, n - 1, min(n, GAP_POINTS)).astype(int))
         ds = np.linspace(0.0, abs(span), 2 * EVENT_SCAN + 1) * np.sign(span)
-        g = self._gaps(ring, cls, rotor, x[pick], ds, orient)
-        crossed = (g[1:] <= 0.0) & (g[:-1] > 0.0)
-        hit = crossed.any(axis=0)
+        at, hit, touched = self._closing_at(ring, cls, rotor, x[pick], ds, orient)
+        if len(fixed):
+            # (a contact of the section is where the surfaces touch now)
+            at[np.isin(pick, fixed)] = 0.0
+            hit[np.isin(pick, fixed)] = touched[np.isin(pick, fixed)] = True
+        for _ in range(BIRTH_ROUNDS if TRUE_CLOSING else 0):
+            k = np.nonzero(hit)[0]
+            a, b = pick[k[:-1]], pick[k[1:]]
+            far = (b - a > 1) & (np.abs(at[k[1:]] - at[k[:-1]]) > BIRTH_JUMP * abs(span))
+            if not far.any():
+                break
+            more = (a[far] + b[far]) // 2
+            at2, hit2, t2 = self._closing_at(ring, cls, rotor, x[more], ds, orient)
+            pick = np.concatenate([pick, more])
+            order = np.argsort(pick)
+            pick, at, hit, touched = pick[order], np.concatenate([at, at2])[order], \
+                np.concatenate([hit, hit2])[order], np.concatenate([touched, t2])[order]
         if not hit.any():
             return np.full(n, span), np.zeros(n, dtype=bool)
+        use = hit & touched if TOUCHED_ONLY and (hit & touched).any() else hit
+        own = np.interp(np.arange(n), pick[use], at[use])
+        found = np.interp(np.arange(n), pick, hit.astype(float)) > 0.5
+        return own, found
+
+    def _closing_at(self, ring, cls, rotor, x, ds, orient):
+        """(move, whether found) per point of x: scanned over ``ds``, bisected, and on
+        to where the true surfaces touch (:meth:`_touching`) where they do."""
+        g = self._gaps(ring, cls, rotor, x, ds, orient)
+        crossed = (g[1:] <= 0.0) & (g[:-1] > 0.0)
+        hit = crossed.any(axis=0)
         first = np.argmax(crossed, axis=0)
         lo, hi = ds[first], ds[first + 1]
         for _ in range(BISECT):
             mid = 0.5 * (lo + hi)
-            open_ = self._gaps_each(ring, cls, rotor, x[pick], mid, orient) > 0.0
+            open_ = self._gaps_each(ring, cls, rotor, x, mid, orient) > 0.0
             lo, hi = np.where(open_, mid, lo), np.where(open_, hi, mid)
         at = 0.5 * (lo + hi)
-        use = hit
-        if TRUE_CLOSING:
-            at, touched = self._touching(ring, cls, rotor, x[pick], at, ds[1] - ds[0], orient)
-            if (hit & touched).any():
-                use = hit & touched
-        own = np.interp(np.arange(n), pick[use], at[use])
-        found = np.interp(np.arange(n), pick, hit.astype(float)) > 0.5
-        return own, found
+        touched = np.zeros(len(x), dtype=bool)
+        if TRUE_CLOSING and hit.any():
+            h = np.nonzero(hit)[0]
+            at[h], touched[h] = self._touching(ring, cls, rotor, x[h], at[h], ds[1] - ds[0],
+                                               orient)
+        return at, hit, touched
 
     def _touching(self, ring, cls, rotor, x, at, step, orient):
         """Per point: where the true surfaces touch, from ``at``, where its grown gap
@@ -331,7 +360,9 @@ class Events:
         (the circular 4/6 pair's, 116.3 deg after the chamber's birth, opens 0.9 deg
         before its median gap at 48 steps per period), and the vertices beyond the
         scan were swept from its end, late."""
-        own, found = self._closing(ring, cls, chain.rotor, chain.points, reach)
+        fixed = [i for i, e in zip((0, len(chain.points) - 1), chain.contact_ends,
+                                    strict=True) if e and FIX_ENDS]
+        own, found = self._closing(ring, cls, chain.rotor, chain.points, reach, fixed)
         return own if found.any() else np.full(len(chain.points), dpsi)
 
     def _rigid(self, smp, ring_index, dpsi, kind, reach):

@@ -40,6 +40,9 @@ class Chain:
     hi: float
     ring: int  # index of its ring in the sample
     par: np.ndarray | None = None  # per point, unwrapped as lo .. hi
+    #: whether its first and its last point are a contact with the other rotor (the
+    #: section's own, :func:`chains`), not a vertex of the section
+    contact_ends: tuple = (False, False)
 
 
 class Surfaces:
@@ -177,12 +180,13 @@ def chains(ring, cls, par, periods, index, contacts=None, reach=0.0) -> list[Cha
         steps = np.remainder(np.diff(par[r]) + 0.5 * n, n) - 0.5 * n
         s = par[r[0]] + np.concatenate([[0.0], np.cumsum(steps)])
         pts = ring[r]
+        ends = [False, False]
         if contacts:
-            pts, s = _to_contacts(pts, s, cls[(r[0] - 1) % m], cls[(r[-1] + 1) % m], k,
-                                  np.asarray(contacts, dtype=float), reach)
+            pts, s, ends = _to_contacts(pts, s, cls[(r[0] - 1) % m], cls[(r[-1] + 1) % m], k,
+                                        np.asarray(contacts, dtype=float), reach)
         if s[-1] < s[0]:
-            s, pts = s[::-1], pts[::-1]
-        out.append(Chain(k, pts, float(s[0]), float(s[-1]), index, s))
+            s, pts, ends = s[::-1], pts[::-1], ends[::-1]
+        out.append(Chain(k, pts, float(s[0]), float(s[-1]), index, s, tuple(ends)))
     return out
 
 
@@ -191,6 +195,7 @@ def chains(ring, cls, par, periods, index, contacts=None, reach=0.0) -> list[Cha
 def _to_contacts(pts, s, before, after, k, contacts, reach):
     """A run's points and parameters, each end that meets the other rotor's run carried
     on to the nearest of ``contacts`` within ``reach``."""
+    ends = [False, False]
     for end, nb in ((0, before), (-1, after)):
         if nb < 0 or nb == k:
             continue
@@ -202,4 +207,5 @@ def _to_contacts(pts, s, before, after, k, contacts, reach):
             pts, s = np.vstack([contacts[j], pts]), np.r_[s[0], s]
         else:
             pts, s = np.vstack([pts, contacts[j]]), np.r_[s, s[-1]]
-    return pts, s
+        ends[end] = True
+    return pts, s, ends

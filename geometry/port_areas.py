@@ -91,7 +91,9 @@ def open_areas(machine: SweptMachine, timing: PortTiming, ages: np.ndarray,
     h = float(sec.psi[1] - sec.psi[0]) if steps is None else machine.period / steps
     memo = {}
 
-    def section_at(psi, contacts=None):  # each planar section serves both faces
+    def section_at(psi, contacts=None):
+        # Each planar section serves both faces; the sweeps' samples need the contacts
+        # (a whole cut), the open sections only the polygons.
         key = round(psi / EPS_AGE)
         if key not in memo or (contacts is not None and memo[key][1] is None):
             found = None if contacts is None else []

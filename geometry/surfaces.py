@@ -162,7 +162,10 @@ def area(ring) -> float:
 
 def chains(ring, cls, par, periods, index, contacts=None, reach=0.0) -> list[Chain]:
     """The runs of ``ring``'s vertices on one rotor (``cls``: :meth:`Surfaces.classify`),
-    each a :class:`Chain` of ring ``index``; ``periods``: each profile's parameter range."""
+    each a :class:`Chain` of ring ``index``; ``periods``: each profile's parameter range.
+    A run's end that meets another rotor's run is carried on to the nearest of
+    ``contacts`` within ``reach`` (the section's own: where the true surfaces touch, not
+    where the grown polygons meet)."""
     m = len(ring)
     change = np.nonzero(cls != np.roll(cls, 1))[0]
     if not len(change):
@@ -193,8 +196,10 @@ def chains(ring, cls, par, periods, index, contacts=None, reach=0.0) -> list[Cha
 
 
 def _to_contacts(pts, s, before, after, k, contacts, reach):
-    """A run's points and parameters, each end that meets the other rotor's run carried
-    on to the nearest of ``contacts`` within ``reach``."""
+    """(points, parameters, whether each end is a contact) of a run of rotor k whose
+    ring neighbours are rotors ``before`` and ``after`` (-1: none): each end that meets
+    the other rotor's run carried on to the nearest of ``contacts`` within ``reach``
+    (its parameter the end's: no piece matching goes by it)."""
     ends = [False, False]
     for end, nb in ((0, before), (-1, after)):
         if nb < 0 or nb == k:

@@ -248,10 +248,10 @@ def test_a_sliver_that_opens_onto_its_chamber_is_swept():
 
 @pytest.mark.xfail(strict=True, reason=(
     "issue 13's 1e-4 on the port areas: against sections whose polygons are 16 times "
-    "finer (chord error and the rotors' growth) the 4/6 pin-cycloid's discharge area "
-    "differs by 3.4e-3 of its largest near its closing (measured 2026-11-29), falling "
-    "as the square root of the growth: the sealed region's sweep misses strips along "
-    "the path of contact (README, bench/bench_twin_screw.py)"))
+    "finer (chord error and the rotors' growth) the 4/6 pin-cycloid's suction and "
+    "discharge areas differ by 1.14e-4 and 1.10e-4 of their largest (measured "
+    "2026-11-29; 9.3e-5 and 3.4e-3 before slivers were swept from where the true "
+    "surfaces touch and pieces' ends reached the contacts, geometry/footprint_gaps.py)"))
 def test_port_areas_do_not_depend_on_the_sections_polygons(monkeypatch):
     """The table's port areas with the shipped polygons and with polygons 16 times
     finer in chord error and growth (geometry/twin_screw/regions.py), at the same

@@ -20,11 +20,12 @@ sample's (:mod:`.footprint_events`):
 * a sliver born (dying): two rotor surfaces that touched along a band come apart (close
   up).  Moved back (on) rigidly, its rotor pieces meet again; each vertex is swept from
   where its own surfaces touch (a sliver may open along its length over a while; the
-  grown rotors meet earlier, :mod:`.footprint_gaps`), no section cut.  A union of sections misses most of what a sliver passes: the 4/6
-  pin-cycloid's female groove, born 2.1 deg after the table's birth node, sweeps 1.13
-  mm2 of one corner of the lens in its first 0.6 deg, of which the union of its
-  sections every 0.02 deg holds 0.12 mm2, every 0.0005 deg 0.96 mm2
-  (tests/test_twin_screw_port_areas.py);
+  grown rotors meet earlier, :mod:`.footprint_gaps`), no section cut.  A union of
+  sections misses most of what a sliver passes: the 4/6 pin-cycloid's female groove,
+  born 2.1 deg after the table's birth node, sweeps 1.67 mm2 of one corner of the lens
+  in its first 0.6 deg (1.13 swept from where the grown rotors met), of which the union
+  of its sections every 0.02 deg holds 0.12 mm2, every 0.001 deg 0.88 (1.14 with
+  polygons 16 times finer; tests/test_twin_screw_port_areas.py);
 * a pocket handed over (a family hands a trapped pocket from the dying chamber to the
   newborn one where its area is least): swept rigidly from the least area of the
   rigidly moved pocket;
@@ -38,8 +39,9 @@ The corners are where a piece of one rotor meets another's or a still curve.  Wh
 two rotors touch, the section (cut from rotors grown so that they overlap) ends half an
 overlap lens short of the contact: each piece's end there is carried on to the
 section's own contact (CONTACT_REACH), so that the bands' corners run along the path of
-contact, not beside it.  Each vertex must be told to the right rotor; in a film thinner than the profiles' chord
-error (the circular pair's conformal arcs) that takes the true curves
+contact, not beside it.  Each vertex must be told to the right rotor; in a film
+thinner than the profiles' chord error (the circular pair's conformal arcs) that takes
+the true curves
 (:meth:`.surfaces.Surfaces._films`).
 
 Optionally (REFINE) one more section is cut just after each event, where the sliver has

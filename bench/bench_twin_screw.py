@@ -19,7 +19,13 @@ Measured 2026-11-29 (two profiles in parallel on the 2 cores): the port areas ag
 polygons 16 times finer, at 24 / 48 points per period, discharge 3.44e-3 / 3.54e-3
 (pin-cycloid) and 5.88e-3 / 5.63e-3 (circular), suction 9.3e-5 / 8.1e-5 and 8.3e-4 /
 8.0e-4: neither profile meets the error at any resolution (README: two causes, both the
-grown rotors' overlap, located; fixes tried and not adopted).  The rest as below.
+grown rotors' overlap, located).  Fixed since (slivers swept from where the true
+surfaces touch, pieces' ends at the sections' contacts, geometry/footprint_gaps.py;
+measured by scripts, this bench not rerun): discharge 1.1e-4 / 7.1e-5 and 1.06e-3 /
+4.5e-4, suction 1.14e-4 / 5.5e-5 and 2.4e-5 / 2.4e-5; against each machine's own
+sealed regions swept 768 times per period discharge 1.1e-4 / 4.5e-5 and 2.4e-4 /
+9.4e-5.  CPU at 24: 1.97 and 2.41 s (1.82 and 2.17 before, loaded machine).  The rest
+as below.
 
 Before (loaded 2-core machine, 1 core; other jobs on both), at 24 / 48 / 96 /
 192 points per period: CPU 2.73 / 3.31 / 4.72 / 10.08 s (pin-cycloid), 3.36 / 4.42 /
@@ -77,10 +83,10 @@ LINES_REFERENCE = 192
 #: geometry/twin_screw/regions.py), so they do not see what the port areas owe to
 #: those: each resolution up to POLYGON_CHECK is also run with polygons POLYGON_REFINE
 #: times finer in both, and the port areas' largest difference is an error of its own
-#: (a lower bound: it falls as the square root of the growth, so the 16-fold finer
-#: run still holds a quarter of it).  It does not fall with the angle step (3.44e-3
-#: and 3.54e-3 at 24 and 48 on the pin-cycloid's discharge): the finer resolutions
-#: carry the last one measured, rather than a run of minutes each.
+#: (it fell as the square root of the growth before slivers were swept from where the
+#: true surfaces touch, geometry/footprint_gaps.py; 3.44e-3 and 3.54e-3 at 24 and 48
+#: on the pin-cycloid's discharge then, 1.1e-4 and 7.1e-5 since): the finer
+#: resolutions carry the last one measured, rather than a run of minutes each.
 POLYGON_REFINE = 16.0
 POLYGON_CHECK = 48
 TARGET_TIME_S = 1.0

@@ -19,12 +19,13 @@ sample's (:mod:`.footprint_events`):
 
 * a sliver born (dying): two rotor surfaces that touched along a band come apart (close
   up).  Moved back (on) rigidly, its rotor pieces meet again; each vertex is swept from
-  where its own gap closes (a sliver may open along its length over a while), no
-  section cut.  A union of sections misses most of what a sliver passes: the 4/6
-  pin-cycloid's female groove, born 2.1 deg after the table's birth node, sweeps 1.13
-  mm2 of one corner of the lens in its first 0.6 deg, of which the union of its
-  sections every 0.02 deg holds 0.12 mm2, every 0.0005 deg 0.96 mm2
-  (tests/test_twin_screw_port_areas.py);
+  where its own surfaces touch (a sliver may open along its length over a while; the
+  grown rotors meet earlier, :mod:`.footprint_gaps`), no section cut.  A union of
+  sections misses most of what a sliver passes: the 4/6 pin-cycloid's female groove,
+  born 2.1 deg after the table's birth node, sweeps 1.67 mm2 of one corner of the lens
+  in its first 0.6 deg (1.13 swept from where the grown rotors met), of which the union
+  of its sections every 0.02 deg holds 0.12 mm2, every 0.001 deg 0.88 (1.14 with
+  polygons 16 times finer; tests/test_twin_screw_port_areas.py);
 * a pocket handed over (a family hands a trapped pocket from the dying chamber to the
   newborn one where its area is least): swept rigidly from the least area of the
   rigidly moved pocket;
@@ -34,9 +35,13 @@ sample's (:mod:`.footprint_events`):
 * a corner whose path turns (a tip reaching a cut line): more samples, homed in on the
   turn (:meth:`.footprint_events.Events._turns`).
 
-The corners are where a piece of one rotor meets another's or a still curve, so each
-vertex must be told to the right rotor; in a film thinner than the profiles' chord
-error (the circular pair's conformal arcs) that takes the true curves
+The corners are where a piece of one rotor meets another's or a still curve.  Where
+two rotors touch, the section (cut from rotors grown so that they overlap) ends half an
+overlap lens short of the contact: each piece's end there is carried on to the
+section's own contact (CONTACT_REACH), so that the bands' corners run along the path of
+contact, not beside it.  Each vertex must be told to the right rotor; in a film
+thinner than the profiles' chord error (the circular pair's conformal arcs) that takes
+the true curves
 (:meth:`.surfaces.Surfaces._films`).
 
 Optionally (REFINE) one more section is cut just after each event, where the sliver has
@@ -76,6 +81,16 @@ REFINE = ()
 #: twin screw's grown rotors' overlap, comes out of Clipper as a string of specks, not
 #: as the sliver; the sliver's passage is then swept from its birth rigidly.
 THIN = 1e-5
+#: A rotor piece's end next to the other rotor's piece is carried on to the section's
+#: nearest contact within this (per centre distance; :func:`.surfaces.chains`).  The
+#: grown rotors' overlap lens ends the section's pieces half a lens short of the
+#: contact (a median 97 um, up to 0.5 mm on the circular pair's near-conformal arcs):
+#: the bands' corners ran beside the contact path and strips along it went unswept
+#: (the circular's discharge area 5.9e-3, its suction 8.3e-4 of the largest off the
+#: areas with polygons 16 times finer at 24 points per period; 1.1e-3 and 2.4e-5 with
+#: the contacts).  The family cuts its sections whole for them (the section table's
+#: samples are cut whole anyway).
+CONTACT_REACH = 1e-2
 
 
 @dataclass(frozen=True)
@@ -87,8 +102,10 @@ class Sample:
 
 
 class Sweeper(Events):
-    """Sweeps of one chamber's sections (``section_at(psi)``: polygons, fixed frame),
-    cropped to ``crop`` (a CrossSection, or None)."""
+    """Sweeps of one chamber's sections (``section_at(psi, contacts)``: polygons, fixed
+    frame, the contacts bounding them appended to the list ``contacts``, as
+    :meth:`.family.RotorPair.chamber_polygons`), cropped to ``crop`` (a CrossSection,
+    or None)."""
 
     def __init__(self, surfaces: Surfaces, section_at, crop=None, annuli=None):
         self.surfaces = surfaces
@@ -103,7 +120,9 @@ class Sweeper(Events):
     def sample(self, psi: float) -> Sample | None:
         from manifold3d import CrossSection, FillRule
 
-        polys = [np.ascontiguousarray(q) for q in self.section_at(psi) if len(q) >= 3]
+        contacts = []
+        polys = [np.ascontiguousarray(q) for q in self.section_at(psi, contacts)
+                 if len(q) >= 3]
         if self.crop is not None:  # (most of a chamber's life lies outside the crop)
             polys = [q for q in polys if self._near_crop(q)]
         if not polys:
@@ -122,7 +141,8 @@ class Sweeper(Events):
             i = len(rings)
             cls, par = self.surfaces.classify(ring, psi)
             rings.append((ring, cls))
-            chains += surface_chains(ring, cls, par, self.periods, i)
+            chains += surface_chains(ring, cls, par, self.periods, i,
+                                     contacts, CONTACT_REACH * self.surfaces.size)
         return Sample(psi, region, tuple(rings), tuple(chains))
 
     def _near_crop(self, q) -> bool:

@@ -6,8 +6,9 @@ between.  Moved rigidly towards that sample (each rotor vertex turned about its 
 the still vertices kept), its area falls: where it falls to nearly nothing and the
 median gap of a rotor piece to the rest of the ring changes sign, a sliver closes
 there; where the area is least inside the step, a pocket was handed over there.  A
-sliver's passage is swept per vertex, each from where its own gap closes (a sliver may
-open along its length over a while); a pocket's, rigidly from the least area on.
+sliver's passage is swept per vertex, each from where its own surfaces touch (a sliver
+may open along its length over a while; :mod:`.footprint_gaps`); a pocket's, rigidly
+from the least area on.
 
 A corner whose path turns between two samples (a chamber's tip, running along the
 contact path, reaching a cut line and then sliding up it) is no event of a ring, but
@@ -21,12 +22,11 @@ import math
 
 import numpy as np
 
+from .footprint_gaps import BIRTH_ROUNDS, EVENT_SCAN, Gaps
 from .planar import cross
 from .surfaces import area as _area
 from .surfaces import turn as _turn
 
-#: Sub-steps of a step scanned for a sliver's birth or death or a pocket's least area.
-EVENT_SCAN = 8
 #: How far (reference angle, rad) a sliver's birth is looked for behind the sample that
 #: first holds it (its death ahead of the last), at least two steps: the samples of its
 #: first 0.2 deg hold none of it (THIN).
@@ -35,11 +35,6 @@ EVENT_REACH = 0.02
 #: within the search closes there (a sliver's birth or death is looked for up to the
 #: least area after that).
 CLOSING = 0.05
-#: Vertices of a rotor piece whose median gap locates a sliver's birth or death, and
-#: whose own births are found (the rest interpolated).
-GAP_POINTS = 33
-#: Bisections of a vertex's own birth in its scan interval (to 2^-8 of it).
-BISECT = 8
 #: A corner's path over a step turns (:func:`_turning`) where the parabolas through the
 #: step and the sample before, and through the step and the sample after, put its
 #: midpoint farther apart than this fraction of its chord (on a smooth path they agree
@@ -56,7 +51,7 @@ JUMP = 4.0
 JUMP_MIN = 0.05
 
 
-class Events:
+class Events(Gaps):
     """The event methods of :class:`.footprint.Sweeper` (a mixin: it needs the sweeper's
     ``surfaces``)."""
 
@@ -116,65 +111,6 @@ class Events:
             q[on] = self.surfaces.move(ring[on], k, dpsi)
         return q
 
-    def _gap(self, ring, cls, k, dpsi, orient) -> float:
-        """Median signed distance of the ring's rotor-k vertices, all moved rigidly by
-        dpsi, to the ring's other edges (positive inside the ring)."""
-        on = cls == k
-        if not on.any() or np.all(on & np.roll(on, -1)):
-            return 0.0
-        x = ring[on]
-        x = x[np.linspace(0, len(x) - 1, min(len(x), GAP_POINTS)).astype(int)]
-        return float(np.median(self._gaps(ring, cls, k, x, np.array([dpsi]), orient)[0]))
-
-    def _gaps(self, ring, cls, k, x, dpsi, orient) -> np.ndarray:
-        """Signed distances (len(dpsi), len(x)) of points x of rotor k, each moved
-        rigidly by each dpsi with the ring, to the ring's edges not along rotor k."""
-        dpsi = np.asarray(dpsi, dtype=float)
-        flat = self._gaps_each(ring, cls, k, np.tile(x, (len(dpsi), 1)),
-                               np.repeat(dpsi, len(x)), orient)
-        return flat.reshape(len(dpsi), len(x))
-
-    def _gaps_each(self, ring, cls, k, x, dpsi, orient) -> np.ndarray:
-        """Signed distance of each point x[v] of rotor k, moved rigidly by dpsi[v] with
-        the ring, to the ring's edges not along rotor k (positive inside the ring).
-
-        Distances and sides do not change under a rotation, so an edge whose two ends
-        move together (one rotor's, or a still curve's) stays put and the points are
-        turned back into its frame instead (a few points against every edge end per
-        point); an edge between two surfaces moves its ends apart and is moved."""
-        on = cls == k
-        other = np.nonzero(~(on & np.roll(on, -1)))[0]
-        nxt = (other + 1) % len(ring)
-        dpsi = np.broadcast_to(np.asarray(dpsi, dtype=float), (len(x),))
-        rotors = self.surfaces.rotors
-        axis, ratio = rotors[k][:2]
-        y = _turn((x - axis)[:, None], ratio * dpsi)[:, 0] + axis
-        best = np.full(len(x), np.inf)
-        signed = np.zeros(len(x))
-        ca, cb = cls[other], cls[nxt]
-        same = ca == cb
-        for c in np.unique(ca[same]):
-            sel = same & (ca == c)
-            if 0 <= c < len(rotors):
-                ax, r = rotors[c][:2]
-                yc = _turn((y - ax)[:, None], -r * dpsi)[:, 0] + ax
-            else:
-                yc = y
-            a, b = ring[other[sel]][None], ring[nxt[sel]][None]
-            dist, side = _edge_distance(yc[:, None], a, b)
-            _keep_nearest(best, signed, dist, side)
-        if not same.all():
-            ends = np.concatenate([other[~same], nxt[~same]])
-            q = np.broadcast_to(ring[ends], (len(x), len(ends), 2)).copy()
-            for c, (ax, r, *_rest) in enumerate(rotors):
-                on_c = cls[ends] == c
-                if on_c.any():
-                    q[:, on_c] = _turn(ring[ends][on_c] - ax, r * dpsi) + ax
-            m = int((~same).sum())
-            dist, side = _edge_distance(y[:, None], q[:, :m], q[:, m:])
-            _keep_nearest(best, signed, dist, side)
-        return signed * best * orient
-
     def _jumps(self, bands):
         """Bands of what a corner's jump exposed or covered between two samples (the
         bands' (piece at a, piece at b, psi_a, psi_b, sample a, sample b)).
@@ -228,7 +164,8 @@ class Events:
             return []
         ring, cls = smp.rings[chain.ring]
         pts = chain.points[mask]
-        own, found = self._closing(ring, cls, chain.rotor, pts, sign * (t1 - t0))
+        own, found = self._closing(ring, cls, chain.rotor, pts, sign * (t1 - t0),
+                                   _contacts_in(chain, mask))
         if found.sum() < 2:
             return []
         axis, ratio = self.surfaces.rotors[chain.rotor][:2]
@@ -236,42 +173,22 @@ class Events:
         band = ring_section(np.concatenate([pts[found], moved[::-1]]))
         return [] if band is None else [band]
 
-    def _closing(self, ring, cls, rotor, x, span):
-        """Per point of ``x`` (rotor ``rotor``'s, on ``ring``): the rigid move (signed,
-        within ``span``) to where its gap to the ring's other edges closes, and whether
-        it closes there.  Found on GAP_POINTS of them, scanned and bisected; the rest
-        interpolated along x."""
-        orient = 1.0 if _area(ring) > 0.0 else -1.0
-        n = len(x)
-        pick = np.unique(np.linspace(0, n - 1, min(n, GAP_POINTS)).astype(int))
-        ds = np.linspace(0.0, abs(span), 2 * EVENT_SCAN + 1) * np.sign(span)
-        g = self._gaps(ring, cls, rotor, x[pick], ds, orient)
-        crossed = (g[1:] <= 0.0) & (g[:-1] > 0.0)
-        hit = crossed.any(axis=0)
-        if not hit.any():
-            return np.full(n, span), np.zeros(n, dtype=bool)
-        first = np.argmax(crossed, axis=0)
-        lo, hi = ds[first], ds[first + 1]
-        for _ in range(BISECT):
-            mid = 0.5 * (lo + hi)
-            open_ = self._gaps_each(ring, cls, rotor, x[pick], mid, orient) > 0.0
-            lo, hi = np.where(open_, mid, lo), np.where(open_, hi, mid)
-        own = np.interp(np.arange(n), pick[hit], (0.5 * (lo + hi))[hit])
-        found = np.interp(np.arange(n), pick, hit.astype(float)) > 0.5
-        return own, found
-
     def _births(self, ring, cls, chain, dpsi, reach) -> np.ndarray:
         """Per vertex of ``chain`` (a piece of a sliver found born or dying |dpsi| away,
-        by the median of its gap), the rigid move (signed) to where its own gap closes:
-        a sliver may open along its length over a while (a zipper), and the points each
-        vertex passes are swept from its own opening.  Found on GAP_POINTS vertices
-        (the rest interpolated along the chain), scanned over ``reach`` (signed: to where
-        the ring's area is least, :meth:`_event`) and bisected.  Not over twice |dpsi|
+        by the median of its gap), the rigid move (signed) to where its own surfaces
+        touch: a sliver may open along its length over a while (a zipper), and the
+        points each vertex passes are swept from its own opening.  Found on GAP_POINTS
+        vertices and more where they differ (the rest interpolated along the chain),
+        scanned over ``reach`` (signed: to where the ring's area is least,
+        :meth:`_event`), bisected and carried to the touching (:meth:`.Gaps._closing`).
+        An end at one of the section's contacts touches at the sample itself
+        (:func:`_contacts_in`).  Not over twice |dpsi|
         only: a pocket between two contacts opens at its ends first, its middle later
         (the circular 4/6 pair's, 116.3 deg after the chamber's birth, opens 0.9 deg
         before its median gap at 48 steps per period), and the vertices beyond the
         scan were swept from its end, late."""
-        own, found = self._closing(ring, cls, chain.rotor, chain.points, reach)
+        own, found = self._closing(ring, cls, chain.rotor, chain.points, reach,
+                                   _contacts_in(chain), BIRTH_ROUNDS)
         return own if found.any() else np.full(len(chain.points), dpsi)
 
     def _rigid(self, smp, ring_index, dpsi, kind, reach):
@@ -345,6 +262,19 @@ class Events:
         return out
 
 
+def _contacts_in(chain, mask=None):
+    """Indices, among ``chain``'s points (those of ``mask``), of its ends that are the
+    section's contacts (:func:`.surfaces.chains`): they touch at the sample itself.
+    Moved back with their neighbours, a contact (where a zipper has got to) swept a
+    chord across what opened later: up to 150 um past the contact's path on the
+    pin-cycloid's groove born along an arc, and 11 % past the fine sweep of the
+    circular's conformal arcs parting at two steps in 3.75 deg (5.7 % so)."""
+    mask = np.ones(len(chain.points), dtype=bool) if mask is None else mask
+    n = int(mask.sum())
+    return [i for i, e, on in ((0, 0, mask[0]), (n - 1, 1, mask[-1]))
+            if on and chain.contact_ends[e]]
+
+
 def _turn_in(pairs, psis, i):
     """(piece at psis[i], its end, the end's positions at psis[i - 1 .. i + 2], the
     angle) of the first corner of the pieces matched over step i (``pairs``: each
@@ -394,26 +324,3 @@ def _turning(p, t, smooth=True):
     if not (t[1] < a0 < t[2] and t[1] < a1 < t[2]):
         return None
     return 0.5 * (a0 + a1)
-
-
-def _edge_distance(y, a, b):
-    """Distances (v, e) of points y (v, 1, 2) to the segments a -> b (1 or v, e, 2) and
-    the side each lies on (+1 left of a -> b)."""
-    ab = b - a
-    ay = y - a
-    t = np.clip(np.einsum("vek,vek->ve", ay, np.broadcast_to(ab, ay.shape))
-                / np.maximum(np.einsum("vek,vek->ve", ab, ab), 1e-300), 0.0, 1.0)
-    dist = np.linalg.norm(ay - t[..., None] * ab, axis=-1)
-    side = np.sign(ab[..., 0] * ay[..., 1] - ab[..., 1] * ay[..., 0])
-    return dist, side
-
-
-def _keep_nearest(best, signed, dist, side):
-    """Per point (row): where its nearest of these edges beats ``best``, keep its
-    distance and side (in place)."""
-    j = np.argmin(dist, axis=1)
-    v = np.arange(len(best))
-    d = dist[v, j]
-    better = d < best
-    best[better] = d[better]
-    signed[better] = np.broadcast_to(side, dist.shape)[v, j][better]

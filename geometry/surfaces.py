@@ -40,6 +40,9 @@ class Chain:
     hi: float
     ring: int  # index of its ring in the sample
     par: np.ndarray | None = None  # per point, unwrapped as lo .. hi
+    #: whether its first and its last point are a contact with the other rotor (the
+    #: section's own, :func:`chains`), not a vertex of the section
+    contact_ends: tuple = (False, False)
 
 
 class Surfaces:
@@ -157,9 +160,12 @@ def area(ring) -> float:
     return 0.5 * float(np.sum(x * np.roll(y, -1) - y * np.roll(x, -1)))
 
 
-def chains(ring, cls, par, periods, index) -> list[Chain]:
+def chains(ring, cls, par, periods, index, contacts=None, reach=0.0) -> list[Chain]:
     """The runs of ``ring``'s vertices on one rotor (``cls``: :meth:`Surfaces.classify`),
-    each a :class:`Chain` of ring ``index``; ``periods``: each profile's parameter range."""
+    each a :class:`Chain` of ring ``index``; ``periods``: each profile's parameter range.
+    A run's end that meets another rotor's run is carried on to the nearest of
+    ``contacts`` within ``reach`` (the section's own: where the true surfaces touch, not
+    where the grown polygons meet)."""
     m = len(ring)
     change = np.nonzero(cls != np.roll(cls, 1))[0]
     if not len(change):
@@ -177,9 +183,34 @@ def chains(ring, cls, par, periods, index) -> list[Chain]:
         steps = np.remainder(np.diff(par[r]) + 0.5 * n, n) - 0.5 * n
         s = par[r[0]] + np.concatenate([[0.0], np.cumsum(steps)])
         pts = ring[r]
+        ends = [False, False]
+        if contacts:
+            pts, s, ends = _to_contacts(pts, s, cls[(r[0] - 1) % m], cls[(r[-1] + 1) % m], k,
+                                        np.asarray(contacts, dtype=float), reach)
         if s[-1] < s[0]:
-            s, pts = s[::-1], pts[::-1]
-        out.append(Chain(k, pts, float(s[0]), float(s[-1]), index, s))
+            s, pts, ends = s[::-1], pts[::-1], ends[::-1]
+        out.append(Chain(k, pts, float(s[0]), float(s[-1]), index, s, tuple(ends)))
     return out
 
 
+
+
+def _to_contacts(pts, s, before, after, k, contacts, reach):
+    """(points, parameters, whether each end is a contact) of a run of rotor k whose
+    ring neighbours are rotors ``before`` and ``after`` (-1: none): each end that meets
+    the other rotor's run carried on to the nearest of ``contacts`` within ``reach``
+    (its parameter the end's: no piece matching goes by it)."""
+    ends = [False, False]
+    for end, nb in ((0, before), (-1, after)):
+        if nb < 0 or nb == k:
+            continue
+        d = np.linalg.norm(contacts - pts[end], axis=1)
+        j = int(np.argmin(d))
+        if d[j] >= reach or d[j] == 0.0:
+            continue
+        if end == 0:
+            pts, s = np.vstack([contacts[j], pts]), np.r_[s[0], s]
+        else:
+            pts, s = np.vstack([pts, contacts[j]]), np.r_[s, s[-1]]
+        ends[end] = True
+    return pts, s, ends

@@ -42,7 +42,8 @@ def test_a_film_between_conformal_arcs_keeps_each_side_on_its_rotor():
     the female piece begins.  Told by the chords alone the male side's last three
     vertices went to the female piece, which folded round the tip; the bands' corners
     then lagged the tip by 0.3 mm (a sample's vertex farther than 60 um outside the
-    sweep of the test below)."""
+    sweep of the test below).  Both pieces are then carried on to the section's contact
+    beyond the film's tip (footprint.CONTACT_REACH), the same point for both."""
     m = circular()
     smp = _sweeper(m).sample(m.section.phi_i + 17.8125 * DEG)
     for c in smp.chains:
@@ -51,9 +52,16 @@ def test_a_film_between_conformal_arcs_keeps_each_side_on_its_rotor():
     ring, _ = smp.rings[0]
     box = (np.abs(ring[:, 0] - 0.0472) < 1e-3) & (np.abs(ring[:, 1] + 0.0084) < 1e-3)
     tip = ring[np.nonzero(box)[0][np.argmin(ring[box, 1])]]
-    ends = {c.rotor: min(np.linalg.norm(c.points[[0, -1]] - tip, axis=1))
-            for c in smp.chains if np.min(np.linalg.norm(c.points - tip, axis=1)) < 1e-3}
+    near = [c for c in smp.chains if np.min(np.linalg.norm(c.points - tip, axis=1)) < 1e-3]
+    ends, contacts = {}, {}
+    for c in near:
+        # the ring's own vertices at the piece's ends, and the contacts beyond them
+        own = [1 if c.contact_ends[0] else 0, -2 if c.contact_ends[1] else -1]
+        ends[c.rotor] = min(np.linalg.norm(c.points[own] - tip, axis=1))
+        contacts[c.rotor] = [tuple(c.points[k]) for k, e in ((0, 0), (-1, 1))
+                             if c.contact_ends[e]]
     assert ends[0] == 0.0 and 0.0 < ends[1] < 5e-5, ends
+    assert set(contacts[0]) & set(contacts[1]), contacts
 
 
 def _outside(region, points):

@@ -7,9 +7,10 @@ become slot k+1 of the next, so integrating one period and shifting the slots is
 cycle of the machine (seed 000: chambers are the same chamber shifted by 2 pi / N1).
 
 State per slot: mass m and internal energy U of the gas (and the oil's or liquid's mass
-and energy, :mod:`.oil`, :mod:`.liquid`).  With the gas's volume they give rho and u,
-hence p and T without inner iteration; mass and energy are linear invariants, which an
-explicit Runge-Kutta method conserves to round-off.
+and energy, :mod:`.oil`, :mod:`.liquid`, and a volatile liquid's vapour, :mod:`.humid`).
+With the gas's volume they give rho and u, hence p and T without inner iteration; mass
+and energy are linear invariants, which an explicit Runge-Kutta method conserves to
+round-off.
 
     dm/dt = sum of mass flows in
     dU/dt = sum of (mass flow in * enthalpy of its upstream side) + Q - p dV/dt

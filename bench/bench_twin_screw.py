@@ -24,8 +24,13 @@ surfaces touch, pieces' ends at the sections' contacts, geometry/footprint_gaps.
 measured by scripts, this bench not rerun): discharge 1.1e-4 / 7.1e-5 and 1.06e-3 /
 4.5e-4, suction 1.14e-4 / 5.5e-5 and 2.4e-5 / 2.4e-5; against each machine's own
 sealed regions swept 768 times per period discharge 1.1e-4 / 4.5e-5 and 2.4e-4 /
-9.4e-5.  CPU at 24: 1.97 and 2.41 s (1.82 and 2.17 before, loaded machine).  The rest
-as below.
+9.4e-5.  CPU at 24: 1.97 and 2.41 s (1.82 and 2.17 before, loaded machine).  This
+bench rerun after the fix (idle machine, both profiles in parallel, 5 min), at 24 / 48 /
+96 / 192 against its 768-point machine: suction 8.4e-5 / 2.7e-5 / 4.2e-6 / 1.9e-6
+(pin-cycloid) and 1.0e-4 / 2.6e-5 / 3.6e-5 / 1.5e-5 (circular), discharge 1.1e-4 /
+4.5e-5 / 9.1e-5 / 2.7e-5 and 2.2e-4 / 2.0e-4 / 3.4e-4 / 5.9e-5; CPU 2.64 / 4.22 / 6.63 /
+10.63 s and 3.54 / 4.09 / 5.82 / 11.73 s (two processes on two cores).  The rest as
+below.
 
 Before (loaded 2-core machine, 1 core; other jobs on both), at 24 / 48 / 96 /
 192 points per period: CPU 2.73 / 3.31 / 4.72 / 10.08 s (pin-cycloid), 3.36 / 4.42 /

@@ -193,8 +193,6 @@ def chains(ring, cls, par, periods, index, contacts=None, reach=0.0) -> list[Cha
     return out
 
 
-
-
 def _to_contacts(pts, s, before, after, k, contacts, reach):
     """(points, parameters, whether each end is a contact) of a run of rotor k whose
     ring neighbours are rotors ``before`` and ``after`` (-1: none): each end that meets

@@ -95,7 +95,8 @@ class Vapour:
         if not t_lo < T0 < t_hi:
             raise CaseError(f"the liquid's temperature {T0:.1f} K lies outside {name}'s "
                             f"liquid range ({t_lo:.1f} to {t_hi:.1f} K)")
-        T = 1.0 / np.linspace(1.0 / t_lo, 1.0 / t_hi, SAT_NODES)
+        inv_T = np.linspace(1.0 / t_hi, 1.0 / t_lo, SAT_NODES)  # increasing, for interp
+        T = 1.0 / inv_T
         ln_p = np.empty_like(T)
         for i, t in enumerate(T):
             st.update(CP.QT_INPUTS, 1.0, t)
@@ -106,8 +107,7 @@ class Vapour:
         h_fg0 = h_v - st.hmass()
         cp0 = CP.PropsSI("CP0MASS", "T", T0, "Q", 1.0, name)
         R = R_UNIVERSAL / st.molar_mass()  # (kg/mol)
-        order = np.argsort(1.0 / T)
-        return cls(name, R, cp0, h_fg0, T0, (1.0 / T)[order], ln_p[order], lewis)
+        return cls(name, R, cp0, h_fg0, T0, inv_T, ln_p, lewis)
 
 
 @dataclass(frozen=True)

@@ -100,7 +100,7 @@ def _helpers():
     return (flows._x_eff, flows.nozzle_critical_ratio, flows._psi, flows.nozzle_constants,
             flows.nozzle_f_c, flows.fanno_f, dry_air.table_interp, dry_air._lerp,
             coolprop_fluid.table_cell, coolprop_fluid.table_row, coolprop_fluid.table_state,
-            coolprop_bubble.liquid_state, kernel.fluid_state,
+            coolprop_fluid._or_liquid, coolprop_bubble.liquid_state, kernel.fluid_state,
             kernel.ideal_flow, kernel._add, kernel._node, chamber.spline_at,
             stepping.err_norm, stepping.rk_step, stepping._grow, stepping.segment,
             stepping.ros23_step, stepping.jacobian, stepping._w_solve, kernel.rhs_segment,
@@ -112,7 +112,7 @@ def _inlined():
 
     return (kernel._add, kernel._node, kernel.fluid_state, dry_air.table_interp,
             dry_air._lerp, coolprop_fluid.table_row, coolprop_fluid.table_state,
-            coolprop_bubble.liquid_state)
+            coolprop_fluid._or_liquid, coolprop_bubble.liquid_state)
 
 
 def _select(cond, a, b):

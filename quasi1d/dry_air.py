@@ -123,6 +123,11 @@ class ThermallyPerfectGas:
         T, _, icv = self._interp(u)
         return self.R * T, self.R * rho * icv
 
+    def state(self, rho, u):
+        """p, T, kappa, (dp/drho)_u, (dp/du)_rho from one interpolation."""
+        T, kappa, icv = self._interp(u)
+        return self.R * rho * T, T, kappa, self.R * T, self.R * rho * icv
+
     def in_range(self, rho, u) -> bool:
         u0, du, nu, _ = self._table
         return bool(np.all(rho > 0) and np.all(u >= u0) and np.all(u <= u0 + du * (nu - 1)))

@@ -7,6 +7,8 @@ arrays of (rho, u) and without inner iteration:
     props(rho, u)  -> p, T, kappa      (kappa = rho a^2 / p, the isentropic exponent
                                         used by the nozzle formulas)
     dp(rho, u)     -> (dp/drho)_u, (dp/du)_rho   (for the ideal-port constraint)
+    state(rho, u)  -> both at once, from one table lookup (the fluids that are not
+                      perfect gases)
 
 and, at a few points per run (plenum states, port events, performance figures):
 

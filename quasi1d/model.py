@@ -221,7 +221,13 @@ class ChamberModel:
         rho = m / liquid.gas_volume(g[0], y[:, 2 * n:2 * n + na], inv) if inv else m * iV
         u = y[:, n:n + na] / m
         w = humid.fractions(self, y, m, na) if self.vapour else None
-        p, T, kap = fl.props(rho, u) if w is None else fl.props(rho, u, w)
+        dps = None  # (dp/drho)_u, (dp/du)_rho where the ideal ports need them
+        if w is not None:
+            p, T, kap = fl.props(rho, u, w)
+        elif seg.ideal.size and not self.ideal_gas:  # one table lookup for both
+            p, T, kap, *dps = fl.state(rho, u)
+        else:
+            p, T, kap = fl.props(rho, u)
         h = u * fl.gamma if self.ideal_gas else u + p / rho
         R = kernel.nodes(rho, suc.rho, dis.rho)
         fwd, x, p1, r1 = kernel.upstream(kernel.nodes(p, suc.p, dis.p), R, seg.ia, seg.ib)
@@ -256,7 +262,7 @@ class ChamberModel:
             F[:, seg.cou] -= cou * R[:, seg.cou_older]
         H = kernel.nodes(h, suc.h, dis.h)  # the walls may carry flow against the pressure
         E = kernel.enthalpy_flows(F, H[:, seg.ia], H[:, seg.ib])
-        return F, E, g, m, rho, u, p, T, h, w, *oil_flows
+        return F, E, g, m, rho, u, p, T, h, w, dps, *oil_flows
 
     def _drag_ratios(self, grp, x, fwd, r1, p1, ra, rb):
         """Wall speed ratios V = U sqrt(rho / p) along the flows of a calibrated group and
@@ -289,7 +295,7 @@ class ChamberModel:
                              self.op.wall_temperature_K, self.inv_omega,
                              self.geo.omega_outer, IDEAL_PORT_RELAXATION_RAD, *args)
         n, na = self.n, seg.n_act
-        F, E, g, m, rho, u, p, T, h, w_v, Fo, Eo = self._flows(theta, y, seg)
+        F, E, g, m, rho, u, p, T, h, w_v, dps, Fo, Eo = self._flows(theta, y, seg)
         V, dV, Vt, wall = g[0], g[2], g[3], g[6]
         w = self.inv_omega
         acc0 = self.nv * n
@@ -312,8 +318,7 @@ class ChamberModel:
             xs = humid.ideal_ports(self, seg, dy, pdV, g, y, m, rho, u, p, h, w_v,
                                    IDEAL_PORT_RELAXATION_RAD)
         elif seg.ideal.size:
-            gamma, pr, pu = (self.fluid.gamma, p, p) if self.ideal_gas else (
-                0.0, *self.fluid.dp(rho, u))
+            gamma, pr, pu = (self.fluid.gamma, p, p) if self.ideal_gas else (0.0, *dps)
             V, Vt, kl = liquid.port_volumes(self, y, dy, V, Vt, m, na) \
                 if self.inv_rho_liquid else (V, Vt, 0.0)
             xs = kernel.ideal_ports(dy, pdV, V, Vt, rho, u, p, h, pr, pu, seg.ideal,

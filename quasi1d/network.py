@@ -341,7 +341,7 @@ def _groups(links, laws) -> tuple[FlowGroup, ...]:
         elif law.model == "cfd-calibrated":
             key = ("cfd-calibrated", id(law.correlation), law.k_factor)
         elif law.model == "rarefied":
-            key = ("rarefied", law.gap_m, law.land_m, law.path.measure != "length")
+            key = ("rarefied", law.path.measure != "length")  # (orifices apart)
         else:
             key = (law.model,)
         keys.setdefault(key, []).append(f)
@@ -358,8 +358,8 @@ def _groups(links, laws) -> tuple[FlowGroup, ...]:
                 k_factor=law.k_factor, drag=_index(drag) if drag else None,
                 drag_in_group=_index([fs.index(f) for f in drag]) if drag else None))
         elif key[0] == "rarefied":
-            groups.append(FlowGroup("rarefied", _index(fs), rarefied=RarefiedLaw(
-                law.gap_m, law.land_m, law.viscosity_Pa_s, law.accommodation, key[3])))
+            groups.append(FlowGroup("rarefied", _index(fs), rarefied=RarefiedLaw.of_flows(
+                [laws[links[f].law] for f in fs], key[1])))
         else:
             groups.append(FlowGroup(key[0], _index(fs)))
     return tuple(groups)

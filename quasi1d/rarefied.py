@@ -83,6 +83,7 @@ BETA = 0.4
 # pressure ratios down to 1e-4 against adaptive quadrature (tests).
 N_GAUSS = 16
 _G, _GW = np.polynomial.legendre.leggauss(N_GAUSS)
+_ONE_MINUS_G = 1.0 - _G
 # Pressure ratios below this are taken as this: none occurs between the chambers of a
 # machine, and the flux changes by less than 1e-9 of itself (it is linear in 1 - x or in
 # 1 - x^2 there), while ln x stays finite for the quadrature.
@@ -123,6 +124,17 @@ def _clausing(l: float) -> float:
     return float(math.sqrt(1.0 + l * l) - l + 2.0 * np.sum(w * J * F_out))
 
 
+def _rarefaction(kn, alpha_inf, slip):
+    """R(Kn) of :meth:`RarefiedLaw.rarefaction`, with the law's alpha_inf and s."""
+    alpha = alpha_inf * (2.0 / math.pi) * np.arctan(ALPHA1 * kn**BETA)
+    return (1.0 + alpha * kn) * (1.0 + 6.0 * slip * kn / (1.0 + kn))
+
+
+def _per_node(v):
+    """A per-flow parameter against the quadrature's nodes (a trailing axis)."""
+    return v[..., None] if np.ndim(v) else v
+
+
 @functools.lru_cache(maxsize=128)
 def slot_transmission(l: float) -> float:
     """Free-molecular transmission probability W of a slot of land l = L / h (diffuse
@@ -137,34 +149,48 @@ def slot_transmission(l: float) -> float:
     return (math.log(l) + c) / l
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class RarefiedLaw:
-    """The rarefied flow law of one kind of gap (see the module docstring)."""
+    """The rarefied flow law of one kind of gap (see the module docstring), or of a group
+    of leakage flows (:meth:`of_flows`: the gaps' parameters arrays over the flows, the
+    last axis of the states; one call for a segment's sealing lines)."""
 
-    gap_m: float
-    land_m: float
-    viscosity_Pa_s: float
-    accommodation: float = 1.0  # sigma, tangential momentum accommodation
+    gap_m: float | np.ndarray
+    land_m: float | np.ndarray
+    viscosity_Pa_s: float | np.ndarray
+    accommodation: float | np.ndarray = 1.0  # sigma, tangential momentum accommodation
     orifice: bool = False  # the path's column is an area (blow-hole): no land
 
+    @classmethod
+    def of_flows(cls, laws, orifice: bool) -> RarefiedLaw:
+        """One law over flows each flowing by one of ``laws`` (anything with this class's
+        gap_m, land_m, viscosity_Pa_s and accommodation): scalars where they agree."""
+        def column(name):
+            v = np.array([getattr(law, name) for law in laws], dtype=float)
+            return float(v[0]) if np.all(v == v[0]) else v
+
+        return cls(column("gap_m"), column("land_m"), column("viscosity_Pa_s"),
+                   column("accommodation"), orifice)
+
     @property
-    def slip(self) -> float:
+    def slip(self):
         """s = (2 - sigma) / sigma of the slip term."""
         return (2.0 - self.accommodation) / self.accommodation
 
     @functools.cached_property
-    def alpha_inf(self) -> float:
+    def alpha_inf(self):
         """alpha_inf = 12 W L / (7 pi h): the free-molecular limit is the slot's W."""
         lh = self.land_m / self.gap_m
-        return 12.0 * slot_transmission(lh) * lh / (7.0 * math.pi)
+        w = np.vectorize(slot_transmission, otypes=[float])(lh) if np.ndim(lh) else \
+            slot_transmission(lh)
+        return 12.0 * w * lh / (7.0 * math.pi)
 
     def knudsen(self, p, RT):
         return mean_free_path(self.viscosity_Pa_s, p, RT) / self.gap_m
 
     def rarefaction(self, kn):
         """R(Kn) = (1 + alpha(Kn) Kn) (1 + 6 s Kn / (1 + Kn)) of the unified model."""
-        alpha = self.alpha_inf * (2.0 / math.pi) * np.arctan(ALPHA1 * kn**BETA)
-        return (1.0 + alpha * kn) * (1.0 + 6.0 * self.slip * kn / (1.0 + kn))
+        return _rarefaction(kn, self.alpha_inf, self.slip)
 
     def viscous_flux(self, x, kn1):
         """Flux of the unified model over sqrt(p1 rho1) per unit of h l, for x = p2/p1
@@ -173,9 +199,9 @@ class RarefiedLaw:
         x = np.maximum(x, X_FLOOR)
         kn1 = np.asarray(kn1, dtype=float)
         half = -0.5 * np.log1p(x - 1.0)  # (ln 1 - ln x) / 2, exact near x = 1
-        xi = np.exp(-half[..., None] * (1.0 - _G))  # nodes in [x, 1]
-        integral = half * np.sum(_GW * xi * xi * self.rarefaction(kn1[..., None] / xi),
-                                 axis=-1)
+        e = np.exp(half[..., None] * _ONE_MINUS_G)  # 1 / xi at the nodes in [x, 1]
+        r = _rarefaction(kn1[..., None] * e, _per_node(self.alpha_inf), _per_node(self.slip))
+        integral = half * np.sum(_GW * r / (e * e), axis=-1)
         return (self.gap_m / self.land_m) * math.sqrt(0.5 * math.pi) / (12.0 * kn1) * integral
 
     def reduced_flux(self, f_nozzle, x, p1, rho1):

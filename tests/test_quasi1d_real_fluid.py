@@ -89,6 +89,8 @@ class DirectCoolProp:
         self.st = CP.AbstractState("HEOS", tab.name)
 
     def __getattr__(self, name):
+        if name == "kernel_params":  # the compiled kernel would evaluate the table instead
+            raise AttributeError(name)
         return getattr(self.tab, name)
 
     def _each(self, rho, u):
@@ -111,6 +113,9 @@ class DirectCoolProp:
     def dp(self, rho, u):
         o = self._each(rho, u)
         return o[3], o[4]
+
+    def state(self, rho, u):
+        return tuple(self._each(rho, u))
 
     def in_range(self, rho, u) -> bool:
         return True

@@ -55,6 +55,14 @@ FD_STEP = 1.0e-6
 # A chord period that does not cut the residual by CHORD_GAIN brings the batch back.
 CHORD_BELOW = 1.0e-2
 CHORD_GAIN = 0.1
+# A full Newton step that does not lower the residual is followed by periods of the
+# plain iteration from the best iterate (integrated alone, ~1/10 of a batch period),
+# kept up while each cuts the residual by PROBE_GAIN; then Newton resumes from the best.
+# A wet pentane pump whose discharging chambers condense: the batch's Newton steps land
+# across the bubble line (20-30 thousand right-hand sides a period instead of 1-2
+# thousand) and never beat the first iterate, while the plain iteration converges by
+# ~20x a period (9 batch periods, 60 s, before NEWTON_PATIENCE ran out).
+PROBE_GAIN = 0.25
 
 
 @dataclass
@@ -191,7 +199,7 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
     anderson = None  # the iterate history once Anderson acceleration has taken over
     deadline = time.perf_counter() + num.max_seconds
     for _ in range(num.max_cycles):
-        batch = newton and not nw.chord
+        batch = newton and nw.batch
         Y0 = np.repeat(z[None], d + 1 if batch else 1, axis=0)
         if batch:
             Y0[np.arange(1, d + 1), idx] += dz
@@ -275,6 +283,13 @@ class _NewtonState:
     J: np.ndarray | None = None  # the last batch's Jacobian of Phi(z) - z
     chord: bool = False  # the next period integrates the state alone (CHORD_BELOW)
     last: float = np.inf  # the residual of the last period
+    plain: float | None = None  # the last residual while plain periods run (PROBE_GAIN)
+    probed: tuple | None = None  # the best iterate they last started from (once each)
+
+    @property
+    def batch(self) -> bool:
+        """The next period carries the perturbed states (the Jacobian)."""
+        return not self.chord and self.plain is None
 
 
 def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figures):
@@ -284,9 +299,21 @@ def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figur
     ("anderson", the best iterate's image) when the best residual has not halved in
     NEWTON_PATIENCE periods."""
     norm = float(np.max(np.abs(z_next - z)[idx] / scales[idx]))
+    if nw.plain is not None:  # this period was the plain iteration's (PROBE_GAIN)
+        if not norm < PROBE_GAIN * nw.plain:  # Newton resumes where it was
+            nw.plain = None
+            return "step", _damped(model, nw.best, idx, nw.lam)
+        nw.plain = norm
+        nw.best, nw.lam, nw.J = _update_best(model, run, z, z_next, idx, dz, norm, nw.best,
+                                             nw.lam, figures, nw.J)
+        return "step", z_next
     was_chord = run.y.shape[0] == 1
+    lam = nw.lam
     nw.best, nw.lam, nw.J = _update_best(model, run, z, z_next, idx, dz, norm, nw.best,
                                          nw.lam, figures, nw.J)
+    if nw.lam < lam and nw.best is not nw.probed:  # a step that failed: probe the map
+        nw.plain, nw.probed = nw.best[0], nw.best
+        return "step", nw.best[4]
     step = nw.best[3]
     nw.chord = (step is not None and nw.best[1] is z and nw.lam >= 1.0
                 and float(np.max(np.abs(step) / scales[idx])) < CHORD_BELOW

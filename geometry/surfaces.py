@@ -151,7 +151,10 @@ def turn(points, angles):
     """points (m, 2) turned by each of angles (n,): (n, m, 2)."""
     c, s = np.cos(angles)[:, None], np.sin(angles)[:, None]
     x, y = points[..., 0], points[..., 1]
-    return np.stack([c * x - s * y, s * x + c * y], -1)
+    out = np.empty(np.broadcast_shapes(c.shape, x.shape) + (2,))
+    np.subtract(c * x, s * y, out=out[..., 0])
+    np.add(s * x, c * y, out=out[..., 1])
+    return out
 
 
 def area(ring) -> float:

@@ -86,17 +86,22 @@ class Surfaces:
                 continue
             x, j = x[near], j[near]
             nearest[k, near] = j
-            for jj in (j - 1, j):  # the two edges at the nearest sample
-                a, b = p[jj % len(p)], p[(jj + 1) % len(p)]
-                ab = b - a
-                t = np.clip(np.einsum("ij,ij->i", x - a, ab) / np.einsum("ij,ij->i", ab, ab),
-                            0.0, 1.0)
-                d = np.hypot(*(a + t[:, None] * ab - x).T)
-                ua, ub = u[jj % len(p)], u[(jj + 1) % len(p)]
-                ub = np.where(ub < ua, ub + n, ub)
-                closer = d < dist[k, near]
-                dist[k, near[closer]] = d[closer]
-                pars[k, near[closer]] = np.mod(ua + t * (ub - ua), n)[closer]
+            # The two edges at the nearest sample, from it back (row 0) and on (row 1),
+            # at once; the edge on where it is strictly nearer.
+            ia = np.stack([j - 1, j]) % len(p)
+            ib = (ia + 1) % len(p)
+            a, ab = p[ia], p[ib] - p[ia]
+            xa = x - a
+            t = np.clip((xa[..., 0] * ab[..., 0] + xa[..., 1] * ab[..., 1])
+                        / (ab[..., 0] * ab[..., 0] + ab[..., 1] * ab[..., 1]), 0.0, 1.0)
+            foot = a + t[..., None] * ab - x
+            d = np.hypot(foot[..., 0], foot[..., 1])
+            ua, ub = u[ia], u[ib]
+            ub = np.where(ub < ua, ub + n, ub)
+            on = (d[1] < d[0]).astype(int)
+            v = np.arange(len(near))
+            dist[k, near] = d[on, v]
+            pars[k, near] = np.mod(ua + t * (ub - ua), n)[on, v]
         self._films(dist, pars, nearest, frames)
         k = np.argmin(dist, axis=0)
         v = np.arange(len(ring))

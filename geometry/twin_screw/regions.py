@@ -403,7 +403,7 @@ def _meets(box, lo, hi) -> bool:
 def _inside(ring, pt) -> bool:
     """Even-odd point-in-polygon test."""
     x, y = ring[:, 0], ring[:, 1]
-    x2, y2 = np.roll(x, -1), np.roll(y, -1)
+    x2, y2 = np.concatenate([x[1:], x[:1]]), np.concatenate([y[1:], y[:1]])
     cond = (y > pt[1]) != (y2 > pt[1])
     with np.errstate(divide="ignore", invalid="ignore"):
         xi = x + (pt[1] - y) * (x2 - x) / (y2 - y)

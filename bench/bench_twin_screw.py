@@ -24,7 +24,12 @@ surfaces touch, pieces' ends at the sections' contacts, geometry/footprint_gaps.
 measured by scripts, this bench not rerun): discharge 1.1e-4 / 7.1e-5 and 1.06e-3 /
 4.5e-4, suction 1.14e-4 / 5.5e-5 and 2.4e-5 / 2.4e-5; against each machine's own
 sealed regions swept 768 times per period discharge 1.1e-4 / 4.5e-5 and 2.4e-4 /
-9.4e-5.  CPU at 24: 1.97 and 2.41 s (1.82 and 2.17 before, loaded machine).  This
+9.4e-5.  CPU at 24: 1.97 and 2.41 s (1.82 and 2.17 before, loaded machine).  Since
+(speed13: the same arithmetic in fewer numpy calls, the table and figures equal to the
+last bit at 24 / 48 / 96), CPU at 24 1.70 and 2.08 s, at 48 2.58 and 2.98 s, against
+1.97 and 2.42 s, 2.94 and 3.37 s for the tree before, alternated with it in the same
+half hour (least of 8 runs of _case each, one process at a time, on the 2-core machine
+loaded by another's jobs, load average 2.2 to 4.5).  This
 bench rerun after the fix (idle machine, both profiles in parallel, 5 min), at 24 / 48 /
 96 / 192 against its 768-point machine: suction 8.4e-5 / 2.7e-5 / 4.2e-6 / 1.9e-6
 (pin-cycloid) and 1.0e-4 / 2.6e-5 / 3.6e-5 / 1.5e-5 (circular), discharge 1.1e-4 /

@@ -135,7 +135,8 @@ class Sweeper(Events):
         rings, chains = [], []
         thin = THIN * self.surfaces.size
         for ring in region.to_polygons():
-            perimeter = float(np.sum(np.linalg.norm(np.roll(ring, -1, 0) - ring, axis=1)))
+            perimeter = float(np.sum(np.linalg.norm(np.diff(ring, axis=0, append=ring[:1]),
+                                                    axis=1)))
             if 2.0 * abs(_area(ring)) < thin * perimeter:
                 continue
             i = len(rings)

@@ -21,6 +21,7 @@ rad.)
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -56,6 +57,22 @@ BIRTH_JUMP = 1.0 / 16.0
 BIRTH_ROUNDS = 5
 
 
+#: Rings whose edges :meth:`Gaps._ring_edges` keeps ready.
+RING_MEMO = 16
+
+
+@dataclass(frozen=True)
+class _RingEdges:
+    """A ring's edges not along one rotor: ``still`` (class, start, vector, squared
+    length) per class whose edges keep their ends on one surface, in class order; the
+    ends of the others (their starts, then their ends) and which of those ends lie
+    on each rotor (``moving``: (rotor, mask))."""
+
+    still: tuple
+    ends: np.ndarray | None
+    moving: tuple
+
+
 class Gaps:
     """The gap methods of :class:`.footprint.Sweeper` (a mixin: it needs the sweeper's
     ``surfaces``)."""
@@ -86,38 +103,68 @@ class Gaps:
         move together (one rotor's, or a still curve's) stays put and the points are
         turned back into its frame instead (a few points against every edge end per
         point); an edge between two surfaces moves its ends apart and is moved."""
-        on = cls == k
-        other = np.nonzero(~(on & np.roll(on, -1)))[0]
-        nxt = (other + 1) % len(ring)
+        edges = self._ring_edges(ring, cls, k)
         dpsi = np.broadcast_to(np.asarray(dpsi, dtype=float), (len(x),))
         rotors = self.surfaces.rotors
         axis, ratio = rotors[k][:2]
         y = _turn((x - axis)[:, None], ratio * dpsi)[:, 0] + axis
-        best = np.full(len(x), np.inf)
-        signed = np.zeros(len(x))
-        ca, cb = cls[other], cls[nxt]
-        same = ca == cb
-        for c in np.unique(ca[same]):
-            sel = same & (ca == c)
+        dist, side = [], []
+        for c, a, ab, den in edges.still:
             if 0 <= c < len(rotors):
                 ax, r = rotors[c][:2]
                 yc = _turn((y - ax)[:, None], -r * dpsi)[:, 0] + ax
             else:
                 yc = y
-            a, b = ring[other[sel]][None], ring[nxt[sel]][None]
-            dist, side = _edge_distance(yc[:, None], a, b)
-            _keep_nearest(best, signed, dist, side)
+            d, s = _edge_distance(yc[:, None], a[None], ab[None], den[None])
+            dist.append(d)
+            side.append(s)
+        if edges.ends is not None:
+            ends, m = edges.ends, len(edges.ends) // 2
+            q = np.broadcast_to(ring[ends], (len(x), len(ends), 2)).copy()
+            for c, on_c in edges.moving:
+                ax, r = rotors[c][:2]
+                q[:, on_c] = _turn(ring[ends][on_c] - ax, r * dpsi) + ax
+            ab = q[:, m:] - q[:, :m]
+            d, s = _edge_distance(y[:, None], q[:, :m], ab, _dot(ab, ab))
+            dist.append(d)
+            side.append(s)
+        # The nearest edge, the first of the nearest: as each group in turn kept only an
+        # edge strictly nearer than the groups' before.
+        dist, side = np.concatenate(dist, axis=1), np.concatenate(side, axis=1)
+        j = np.argmin(dist, axis=1)
+        v = np.arange(len(x))
+        return side[v, j] * dist[v, j] * orient
+
+    def _ring_edges(self, ring, cls, k) -> _RingEdges:
+        """The edges of ``ring`` not along rotor k, grouped for :meth:`_gaps_each`
+        (which asks for one ring's many times over, in scans and bisections); the last
+        RING_MEMO kept."""
+        memo = self.__dict__.setdefault("_ring_memo", {})
+        key = (id(ring), id(cls), k)
+        held = memo.get(key)
+        if held is not None and held[0] is ring and held[1] is cls:
+            return held[2]
+        if len(memo) >= RING_MEMO:
+            memo.pop(next(iter(memo)))
+        on = cls == k
+        other = np.nonzero(~(on & np.roll(on, -1)))[0]
+        nxt = (other + 1) % len(ring)
+        ca, cb = cls[other], cls[nxt]
+        same = ca == cb
+        still = []
+        for c in np.unique(ca[same]):
+            sel = same & (ca == c)
+            a = ring[other[sel]]
+            ab = ring[nxt[sel]] - a
+            still.append((int(c), a, ab, _dot(ab, ab)))
+        ends, moving = None, []
         if not same.all():
             ends = np.concatenate([other[~same], nxt[~same]])
-            q = np.broadcast_to(ring[ends], (len(x), len(ends), 2)).copy()
-            for c, (ax, r, *_rest) in enumerate(rotors):
-                on_c = cls[ends] == c
-                if on_c.any():
-                    q[:, on_c] = _turn(ring[ends][on_c] - ax, r * dpsi) + ax
-            m = int((~same).sum())
-            dist, side = _edge_distance(y[:, None], q[:, :m], q[:, m:])
-            _keep_nearest(best, signed, dist, side)
-        return signed * best * orient
+            moving = [(c, cls[ends] == c) for c in range(len(self.surfaces.rotors))
+                      if (cls[ends] == c).any()]
+        out = _RingEdges(tuple(still), ends, tuple(moving))
+        memo[key] = (ring, cls, out)
+        return out
 
     def _closing(self, ring, cls, rotor, x, span, fixed=(), rounds=0):
         """Per point of ``x`` (rotor ``rotor``'s, on ``ring``): the rigid move (signed,
@@ -226,24 +273,15 @@ class Gaps:
         return out, found
 
 
-def _edge_distance(y, a, b):
-    """Distances (v, e) of points y (v, 1, 2) to the segments a -> b (1 or v, e, 2) and
-    the side each lies on (+1 left of a -> b)."""
-    ab = b - a
-    ay = y - a
-    t = np.clip(np.einsum("vek,vek->ve", ay, np.broadcast_to(ab, ay.shape))
-                / np.maximum(np.einsum("vek,vek->ve", ab, ab), 1e-300), 0.0, 1.0)
-    dist = np.linalg.norm(ay - t[..., None] * ab, axis=-1)
-    side = np.sign(ab[..., 0] * ay[..., 1] - ab[..., 1] * ay[..., 0])
-    return dist, side
+def _dot(u, v):
+    return u[..., 0] * v[..., 0] + u[..., 1] * v[..., 1]
 
 
-def _keep_nearest(best, signed, dist, side):
-    """Per point (row): where its nearest of these edges beats ``best``, keep its
-    distance and side (in place)."""
-    j = np.argmin(dist, axis=1)
-    v = np.arange(len(best))
-    d = dist[v, j]
-    better = d < best
-    best[better] = d[better]
-    signed[better] = np.broadcast_to(side, dist.shape)[v, j][better]
+def _edge_distance(y, a, ab, den):
+    """Distances (v, e) of points y (v, 1, 2) to the segments from a along ab (1 or v,
+    e, 2; ``den`` their squared lengths) and the side each lies on (+1 left of it)."""
+    ay0, ay1 = y[..., 0] - a[..., 0], y[..., 1] - a[..., 1]
+    ab0, ab1 = ab[..., 0], ab[..., 1]
+    t = np.clip((ay0 * ab0 + ay1 * ab1) / np.maximum(den, 1e-300), 0.0, 1.0)
+    d0, d1 = ay0 - t * ab0, ay1 - t * ab1
+    return np.sqrt(d0 * d0 + d1 * d1), np.sign(ab0 * ay1 - ab1 * ay0)

@@ -86,17 +86,22 @@ class Surfaces:
                 continue
             x, j = x[near], j[near]
             nearest[k, near] = j
-            for jj in (j - 1, j):  # the two edges at the nearest sample
-                a, b = p[jj % len(p)], p[(jj + 1) % len(p)]
-                ab = b - a
-                t = np.clip(np.einsum("ij,ij->i", x - a, ab) / np.einsum("ij,ij->i", ab, ab),
-                            0.0, 1.0)
-                d = np.hypot(*(a + t[:, None] * ab - x).T)
-                ua, ub = u[jj % len(p)], u[(jj + 1) % len(p)]
-                ub = np.where(ub < ua, ub + n, ub)
-                closer = d < dist[k, near]
-                dist[k, near[closer]] = d[closer]
-                pars[k, near[closer]] = np.mod(ua + t * (ub - ua), n)[closer]
+            # The two edges at the nearest sample, from it back (row 0) and on (row 1),
+            # at once; the edge on where it is strictly nearer.
+            ia = np.stack([j - 1, j]) % len(p)
+            ib = (ia + 1) % len(p)
+            a, ab = p[ia], p[ib] - p[ia]
+            xa = x - a
+            t = np.clip((xa[..., 0] * ab[..., 0] + xa[..., 1] * ab[..., 1])
+                        / (ab[..., 0] * ab[..., 0] + ab[..., 1] * ab[..., 1]), 0.0, 1.0)
+            foot = a + t[..., None] * ab - x
+            d = np.hypot(foot[..., 0], foot[..., 1])
+            ua, ub = u[ia], u[ib]
+            ub = np.where(ub < ua, ub + n, ub)
+            on = (d[1] < d[0]).astype(int)
+            v = np.arange(len(near))
+            dist[k, near] = d[on, v]
+            pars[k, near] = np.mod(ua + t * (ub - ua), n)[on, v]
         self._films(dist, pars, nearest, frames)
         k = np.argmin(dist, axis=0)
         v = np.arange(len(ring))
@@ -151,13 +156,18 @@ def turn(points, angles):
     """points (m, 2) turned by each of angles (n,): (n, m, 2)."""
     c, s = np.cos(angles)[:, None], np.sin(angles)[:, None]
     x, y = points[..., 0], points[..., 1]
-    return np.stack([c * x - s * y, s * x + c * y], -1)
+    out = np.empty(np.broadcast_shapes(c.shape, x.shape) + (2,))
+    np.subtract(c * x, s * y, out=out[..., 0])
+    np.add(s * x, c * y, out=out[..., 1])
+    return out
 
 
 def area(ring) -> float:
     """Signed area of a closed ring (counter-clockwise positive)."""
     x, y = ring[:, 0], ring[:, 1]
-    return 0.5 * float(np.sum(x * np.roll(y, -1) - y * np.roll(x, -1)))
+    # (each vertex's successor by slices: np.roll costs more than a small ring's sum)
+    x2, y2 = np.concatenate([x[1:], x[:1]]), np.concatenate([y[1:], y[:1]])
+    return 0.5 * float(np.sum(x * y2 - y * x2))
 
 
 def chains(ring, cls, par, periods, index, contacts=None, reach=0.0) -> list[Chain]:

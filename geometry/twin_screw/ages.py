@@ -116,7 +116,7 @@ def centroid(ring):
     grid) is located by its vertices' mean: the age asks only where it lies."""
     origin = ring[0]
     x, y = ring[:, 0] - origin[0], ring[:, 1] - origin[1]
-    x2, y2 = np.roll(x, -1), np.roll(y, -1)
+    x2, y2 = np.concatenate([x[1:], x[:1]]), np.concatenate([y[1:], y[:1]])
     c = x * y2 - x2 * y
     a = 0.5 * c.sum()
     if a == 0.0:

@@ -61,15 +61,24 @@ class CircleArc:
     angle1: float
 
     def eval(self, t, order: int = 0):
+        return self.jets(t, (order,))[0]
+
+    def jets(self, t, orders=(0, 1, 2)):
+        """:meth:`eval` at each of ``orders``, from one cosine and sine of the angles (a
+        generated arc asks for three orders at every point)."""
         t = np.asarray(t, dtype=float)
         span = self.angle1 - self.angle0
         g = self.angle0 + t * span
         c, s = np.cos(g), np.sin(g)
-        if order == 0:
-            return np.asarray(self.centre) + self.radius * _stack(c, s)
-        if order == 1:
-            return self.radius * span * _stack(-s, c)
-        return -self.radius * span * span * _stack(c, s)
+        out = []
+        for order in orders:
+            if order == 0:
+                out.append(np.asarray(self.centre) + self.radius * _stack(c, s))
+            elif order == 1:
+                out.append(self.radius * span * _stack(-s, c))
+            else:
+                out.append(-self.radius * span * span * _stack(c, s))
+        return out
 
 
 @dataclass(frozen=True)
@@ -125,6 +134,13 @@ class ParabolaArc:
             local = _stack(np.zeros_like(w), np.full_like(w, 2.0 * k * span * span))
         out = rotate(local, self.tilt)
         return out + np.asarray(self.vertex) if order == 0 else out
+
+
+def jets(arc, t, orders=(0, 1, 2)):
+    """``arc.eval(t, order)`` for each of ``orders``: at once where the arc can."""
+    if hasattr(arc, "jets"):
+        return arc.jets(t, orders)
+    return [arc.eval(t, order) for order in orders]
 
 
 #: Any of the primary arcs above.

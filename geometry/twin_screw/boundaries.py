@@ -179,14 +179,18 @@ class Boundaries(TipBands):
         """Add the loads, wetted lengths, tips and contacts of one boundary ring (its
         :meth:`_labels`), and the curves' slivers to the part's polygon area."""
         lab, vidx = labels
-        change = np.nonzero(lab != np.roll(lab, 1))[0]
+        change = np.nonzero(lab != np.concatenate([lab[-1:], lab[:-1]]))[0]
         if not len(change):
             return
+        # (the ring from its first change of label on; slices, not np.roll: a ring's
+        # few dozen vertices cost numpy's calls, not its arithmetic)
         start = int(change[0])
-        lab, vidx = np.roll(lab, -start), np.roll(vidx, -start)
-        v = np.roll(ring, -start, axis=0)
-        edges = np.linalg.norm(np.roll(v, -1, axis=0) - v, axis=-1)
-        cuts = list(np.nonzero(lab != np.roll(lab, 1))[0]) + [len(lab)]
+        lab = np.concatenate([lab[start:], lab[:start]])
+        vidx = np.concatenate([vidx[start:], vidx[:start]])
+        v = np.concatenate([ring[start:], ring[:start]])
+        d = np.diff(v, axis=0, append=v[:1])
+        edges = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+        cuts = (change - start).tolist() + [len(lab)]
         n = len(lab)
         for i0, i1 in zip(cuts[:-1], cuts[1:], strict=False):
             r = int(lab[i0])
@@ -210,6 +214,17 @@ class Boundaries(TipBands):
             self._runs.append(_Run(part, r, self._snap_tip(r, v[i0], before, psi, part),
                                    self._snap_tip(r, v[i1 % n], after, psi, part),
                                    int(k[0]) if len(k) else -1, int(k[-1]) if len(k) else -1))
+
+    def _tips_at(self, r, psi):
+        """Rotor r's tip points at male angle psi, fixed frame (kept for the last psi:
+        every run's ends ask)."""
+        held = self.__dict__.get("_tips_held")
+        if held is None or held[0] != psi:
+            tips = [self.rotor_at(q, self._rotor_data[q].tips, psi) for q in (0, 1)]
+            for t in tips:
+                t.flags.writeable = False  # (shared by the parts' tips)
+            held = self._tips_held = (psi, tips)
+        return held[1][r]
 
     def _cusp_cut(self, a, b, length, part) -> None:
         """A run along the cusp line that starts or ends at a cusp point is the part's
@@ -255,7 +270,7 @@ class Boundaries(TipBands):
         if self._lands[r]:
             return self._snap_land(r, x, neighbour, psi, part)
         if neighbour in (BORE_M, BORE_F):
-            tips = self.rotor_at(r, self._rotor_data[r].tips, psi)
+            tips = self._tips_at(r, psi)
             k = int(np.argmin(np.linalg.norm(tips - x, axis=-1)))
             part.tips.append((r, k, tips[k]))
             return tips[k]
@@ -265,7 +280,7 @@ class Boundaries(TipBands):
             # A tip passing the cusp: the bore and the cusp line meet there, and the part
             # on one side may end its arc at the bore (snapped to the tip) while the
             # other ends it at the cusp line a lens's length away.  Both take the tip.
-            tips = self.rotor_at(r, self._rotor_data[r].tips, psi)
+            tips = self._tips_at(r, psi)
             d = np.linalg.norm(tips - x, axis=-1)
             k = int(np.argmin(d))
             if d[k] < TIP_MATCH * self.C or self._in_tip_band(r, k, x, psi):

@@ -32,6 +32,7 @@ import numpy as np
 from rotorflow.errors import CaseError
 
 from ..planar import cross, rotate
+from .arcs import jets
 
 #: A rack tangent within this fraction of perpendicular to the pitch line has no finite
 #: contact shift (its normal runs parallel to the pitch line): below 1e-9 the shift
@@ -98,7 +99,13 @@ class Gearing:
 # ------------------------------------------------------------------ rack -> rotors
 def rack_shift(arc, t):
     """(s, ds/dt): the rack shift at which rack point t of ``arc`` is in contact (Eq. 5)."""
-    q, q1, q2 = arc.eval(t, 0), arc.eval(t, 1), arc.eval(t, 2)
+    return _rack_contact(arc, t)[:2]
+
+
+def _rack_contact(arc, t):
+    """(s, ds/dt, rack point, its tangent): :func:`rack_shift` with the arc's point and
+    first derivative it was found from (a generated arc needs them too)."""
+    q, q1, q2 = jets(arc, t)
     a, b = q[..., 0], q[..., 1]
     da, db = q1[..., 0], q1[..., 1]
     dda, ddb = q2[..., 0], q2[..., 1]
@@ -110,7 +117,7 @@ def rack_shift(arc, t):
                         f"t = {tb:.4g}: its normal never passes through the pitch point")
     s = -b - a * da / db
     ds = -db - (da * da + a * dda) / db + a * da * ddb / (db * db)
-    return s, ds
+    return s, ds, q, q1
 
 
 @dataclass(frozen=True)
@@ -130,8 +137,7 @@ class RackGenerated:
     def eval(self, t, order: int = 0):
         tt = _along(t, self.reverse)
         g = self.gearing
-        s, ds = rack_shift(self.arc, tt)
-        q = self.arc.eval(tt, 0)
+        s, ds, q, q1 = _rack_contact(self.arc, tt)
         x = np.stack([g.r1 + q[..., 0], q[..., 1] + s], -1)
         if self.rotor == "male":
             ang, rate, x0 = -s / g.r1, -ds / g.r1, x
@@ -139,7 +145,6 @@ class RackGenerated:
             ang, rate, x0 = s / g.r2, ds / g.r2, x - g.female_axis
         if order == 0:
             return rotate(x0, ang)
-        q1 = self.arc.eval(tt, 1)
         dx = np.stack([q1[..., 0], q1[..., 1] + ds], -1)
         d = rotate(dx, ang) + rate[..., None] * _perp(rotate(x0, ang))
         return -d if self.reverse else d

@@ -255,7 +255,7 @@ class SectionCutter(GrooveAges, Boundaries):
                 halves.append((FEMALE, piece if x0 >= self.xc else piece ^ self._halves[1]))
             for rotor, half in halves:
                 if side == "" and self._isolated(rotor, x0, x1) and self._whole_size(rotor, piece):
-                    part = self._whole_groove(rotor, piece, psi)
+                    part = self._whole_groove(rotor, piece, psi, rings)
                     part.piece = number
                     parts.append(part)
                     continue
@@ -314,16 +314,15 @@ class SectionCutter(GrooveAges, Boundaries):
             return size > WHOLE_FRACTION * self.C ** 2
         return abs(size - ref.area) < WHOLE_FRACTION * ref.area
 
-    def _whole_groove(self, rotor, piece, psi) -> Part:
-        """A whole groove: its area and wetted length are every whole groove's (cut
-        once), its loads those of the arc between its two tips (equal radii: no
-        torque)."""
+    def _whole_groove(self, rotor, piece, psi, rings) -> Part:
+        """A whole groove (``rings``: its polygons, metres): its area and wetted length
+        are every whole groove's (cut once), its loads those of the arc between its two
+        tips (equal radii: no torque)."""
         if rotor not in self._whole:
             self._whole[rotor] = self._part(rotor, piece, psi, "")
         ref = self._whole[rotor]
-        rings = [q / self.k for q in piece.to_polygons()]
         n = len(self._rotor_data[rotor].tips)
-        tips = self.rotor_at(rotor, self._rotor_data[rotor].tips, psi)
+        tips = self._tips_at(rotor, psi)
         # The groove is the one between the two tips its boundary passes (its centroid
         # may lie beyond a tip's ray under a hooked flank).
         if self._lands[rotor]:
@@ -404,7 +403,7 @@ def _meets(box, lo, hi) -> bool:
 def _inside(ring, pt) -> bool:
     """Even-odd point-in-polygon test."""
     x, y = ring[:, 0], ring[:, 1]
-    x2, y2 = np.roll(x, -1), np.roll(y, -1)
+    x2, y2 = np.concatenate([x[1:], x[:1]]), np.concatenate([y[1:], y[:1]])
     cond = (y > pt[1]) != (y2 > pt[1])
     with np.errstate(divide="ignore", invalid="ignore"):
         xi = x + (pt[1] - y) * (x2 - x) / (y2 - y)

@@ -124,7 +124,7 @@ class TipBands:
             end = getattr(run, which)
             others = [getattr(q, w) for q, w in runs
                       if q.rotor == run.rotor and (q is not run or w != which)]
-            if any(np.linalg.norm(end - e) < tol for e in others):
+            if others and (np.linalg.norm(np.array(others) - end, axis=-1) < tol).any():
                 continue
             corners = self.rotor_at(run.rotor, self._band_corners[run.rotor].reshape(-1, 2),
                                     psi)

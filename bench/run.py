@@ -16,6 +16,7 @@ MODULES = (
     "bench.bench_pdsim",
     "bench.bench_real_fluid",
     "bench.bench_humid",
+    "bench.bench_wet_pump",
     "bench.bench_solids",
     "bench.bench_cfd",
     "bench.bench_cfd3d",

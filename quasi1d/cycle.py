@@ -9,7 +9,10 @@ finite differences over a batch of perturbed states integrated together with z i
 same pass (one shared step sequence; a batch costs little more than one state because
 the work per step is dominated by fixed overhead, not by the array length).  Once the
 step sequence has been found, later periods replay it, so that Phi is one fixed smooth
-map and Newton converges on it instead of on integration noise.
+map and Newton converges on it instead of on integration noise.  Where Newton's steps
+fail (kinks of reversing flows, a bubble line), the plain iteration is probed, and
+Anderson's acceleration of it takes over when it contracts fast or Newton stalls
+(PROBE_GAIN, NEWTON_PATIENCE).
 
 Converged: p and T of every chamber at the period start change by less than
 ``cycle_rtol`` (relative) and the period's mass and energy balance close to
@@ -55,13 +58,20 @@ FD_STEP = 1.0e-6
 # A chord period that does not cut the residual by CHORD_GAIN brings the batch back.
 CHORD_BELOW = 1.0e-2
 CHORD_GAIN = 0.1
-# A full Newton step that does not lower the residual is followed by periods of the
-# plain iteration from the best iterate (integrated alone, ~1/10 of a batch period),
-# kept up while each cuts the residual by PROBE_GAIN; then Newton resumes from the best.
-# A wet pentane pump whose discharging chambers condense: the batch's Newton steps land
+# The first full Newton step that does not lower the residual is followed by periods of
+# the plain iteration from the best iterate (integrated alone, ~1/10 of a batch period),
+# kept up while each cuts the residual by PROBE_GAIN; when a later one does not,
+# Anderson acceleration of that iteration takes over.  If the first does not, Newton
+# resumes where it was, with the step sequence it replayed: one cheap period lost.  A
+# wet pentane pump whose discharging chambers condense: the batch's Newton steps land
 # across the bubble line (20-30 thousand right-hand sides a period instead of 1-2
 # thousand) and never beat the first iterate, while the plain iteration converges by
-# ~20x a period (9 batch periods, 60 s, before NEWTON_PATIENCE ran out).
+# ~20x a period (9 batch periods, 60 s, before NEWTON_PATIENCE ran out; now 2).  Once a
+# solve, and Anderson only after a plain period met the gain: where Newton's steps fail
+# at kinks of reversing flows, plain periods started from every new best iterate and
+# then stepped with a stale Jacobian took twice damped Newton's periods (a leaky machine
+# whose map contracts by ~0.6 a period), and a first probe's cut of 3x sent two stress
+# points to Anderson, which converged one (CO2) and not the other in 22 periods.
 PROBE_GAIN = 0.25
 
 
@@ -187,7 +197,7 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
     newton = num.newton and d > 0
     dz = FD_STEP * scales[idx]
     z = model.initial_state()
-    replay = None
+    replay = newton_replay = None
     method = _first_method(model, num)
     cycles = n_rhs = 0
     message = ""
@@ -229,6 +239,9 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
             z = z_next
             continue
         kind, z_new = _newton_next(model, nw, run, z, z_next, idx, dz, scales, (dp, dT, mc, ec))
+        if kind == "resume":  # (a plain period's steps are not Newton's map: PROBE_GAIN)
+            kind, replay = "step", newton_replay
+        newton_replay = replay
         if kind != "stalled":
             newton, anderson = (False, []) if kind == "anderson" else (newton, anderson)
             z = z_new
@@ -284,7 +297,9 @@ class _NewtonState:
     chord: bool = False  # the next period integrates the state alone (CHORD_BELOW)
     last: float = np.inf  # the residual of the last period
     plain: float | None = None  # the last residual while plain periods run (PROBE_GAIN)
-    probed: tuple | None = None  # the best iterate they last started from (once each)
+    probed: bool = False  # they have run (once a solve)
+    plain_runs: int = 0  # plain periods that met PROBE_GAIN
+    resume: np.ndarray | None = None  # Newton's next iterate, put off by them
 
     @property
     def batch(self) -> bool:
@@ -297,23 +312,14 @@ def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figur
     that does not lower the residual is halved (the map has kinks where flows reverse).
     Returns ("step", next iterate), ("stalled", None) after four halvings, or
     ("anderson", the best iterate's image) when the best residual has not halved in
-    NEWTON_PATIENCE periods."""
+    NEWTON_PATIENCE periods; around the first halving, plain periods (PROBE_GAIN)."""
     norm = float(np.max(np.abs(z_next - z)[idx] / scales[idx]))
-    if nw.plain is not None:  # this period was the plain iteration's (PROBE_GAIN)
-        if not norm < PROBE_GAIN * nw.plain:  # Newton resumes where it was
-            nw.plain = None
-            return "step", _damped(model, nw.best, idx, nw.lam)
-        nw.plain = norm
-        nw.best, nw.lam, nw.J = _update_best(model, run, z, z_next, idx, dz, norm, nw.best,
-                                             nw.lam, figures, nw.J)
-        return "step", z_next
+    if nw.plain is not None:
+        return _after_plain(model, nw, run, z, z_next, idx, dz, norm, figures)
     was_chord = run.y.shape[0] == 1
     lam = nw.lam
     nw.best, nw.lam, nw.J = _update_best(model, run, z, z_next, idx, dz, norm, nw.best,
                                          nw.lam, figures, nw.J)
-    if nw.lam < lam and nw.best is not nw.probed:  # a step that failed: probe the map
-        nw.plain, nw.probed = nw.best[0], nw.best
-        return "step", nw.best[4]
     step = nw.best[3]
     nw.chord = (step is not None and nw.best[1] is z and nw.lam >= 1.0
                 and float(np.max(np.abs(step) / scales[idx])) < CHORD_BELOW
@@ -325,9 +331,25 @@ def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figur
         nw.since_gain += 1
     if nw.since_gain >= NEWTON_PATIENCE:
         return "anderson", nw.best[4]
-    if nw.best[3] is not None and nw.lam >= 1.0 / 16.0:
-        return "step", _damped(model, nw.best, idx, nw.lam)
-    return "stalled", None
+    if nw.best[3] is None or nw.lam < 1.0 / 16.0:
+        return "stalled", None
+    z_new = _damped(model, nw.best, idx, nw.lam)
+    if nw.lam < lam and not nw.probed:  # the first step that failed: probe the plain map
+        nw.plain, nw.probed, nw.resume = nw.best[0], True, z_new
+        return "step", nw.best[4]
+    return "step", z_new
+
+
+def _after_plain(model, nw: _NewtonState, run, z, z_next, idx, dz, norm, figures):
+    """After a plain period (PROBE_GAIN): another, Anderson's acceleration of them, or
+    ("resume", Newton's iterate it had put off) after a first one that did not gain."""
+    if norm < PROBE_GAIN * nw.plain:
+        nw.plain, nw.plain_runs = norm, nw.plain_runs + 1
+        nw.best, nw.lam, nw.J = _update_best(model, run, z, z_next, idx, dz, norm, nw.best,
+                                             nw.lam, figures, nw.J)
+        return "step", z_next
+    nw.plain = None
+    return ("anderson", z_next) if nw.plain_runs else ("resume", nw.resume)
 
 
 def _anderson(model, hist: list, z, z_next, idx, scales):

@@ -16,6 +16,11 @@ converged, none invalid, no errors; 39 evaporate on balance, 21 condense; balanc
 exchange).  It found a defect on its way: the cycle's first guess put a discharging
 chamber's whole liquid in its shrinking volume and stopped small machines with "the
 liquid fills the chamber before the discharge opens" (quasi1d/events.initial_state).
+Rerun 2026-11-30 with three jobs on the 2 cores: 59 converged; the slowest point (37,
+the one above) stopped at the 60-s budget after 6 periods with its residual at 8e-8
+(five periods of ros23 carrying its 61 states, 15 s each; 60 s alone on one core, the
+other busy): the budget's failure, not the solver's, which took the same steps as
+before (no Newton step failed, so the plain-iteration probe never ran).
 Output: bench/results/humid_stress.csv.
 """
 

@@ -12,6 +12,13 @@
    message; NaN, negative mass, pressure or temperature count as failures.  Records the
    failure count (target zero) and the run-time distribution.
 
+Stress measured 2026-11-30 (seed 20260521, 1000 points, the compiled kernel, the other
+core busy): 1000 converged, none invalid, 4864 periods in all, median 0.025 s a point,
+the slowest 0.77 s.  The tree before the cycle solver's probe of the plain iteration
+(quasi1d/cycle.py PROBE_GAIN) left one point (16, a leaky 7-lobe machine) at the
+30-period limit in numpy (999, 4805 periods); drafts of the probe that let its period
+into Newton's iteration left two (16 and 947, or 694 and 947).
+
 Outputs in results_dir: quasi1d_accuracy.csv / .png, quasi1d_stress.csv / .png.
 """
 

@@ -27,7 +27,11 @@ invalid, no errors.  Five points (CO2 and R290) are machines that deliver nothin
 (small, slow, wide gaps: the leakage exceeds the displacement, volumetric efficiency
 -0.001 to -0.88); they converge in 6-26 periods.  Tables 20 s, median 0.036 s a
 point with the compiled kernel (0.25 s in numpy), 22 s for the 500; the 50 product runs
-agree with the shared table within 1.3e-4 in flow and power.
+agree with the shared table within 1.3e-4 in flow and power.  Again 2026-11-30, after the
+cycle solver's probe of the plain iteration (quasi1d/cycle.py PROBE_GAIN): 500
+converged, 1995 periods in all (2003 before, numpy), median 0.035 s a point (compiled,
+the other core busy); a draft that let the probe's period into Newton's iteration
+left one CO2 point (156) at the 30-period limit.
 
 Outputs in results_dir: real_fluid_stress.csv (one row a point) and real_fluid_stress.png.
 """

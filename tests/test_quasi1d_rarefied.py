@@ -220,6 +220,24 @@ def test_flux_is_monotone_and_continuous_across_the_regimes(law):
         assert m[0] == 0.0 and np.all(np.diff(m) > 0), kn
 
 
+def test_one_law_over_several_gaps_is_each_gaps_own():
+    # The model evaluates a segment's sealing lines in one call (network._groups:
+    # RarefiedLaw.of_flows, the gaps' parameters arrays over the flows): each column must
+    # be what its own law gives, whatever the others' lands, gaps and accommodation.
+    laws = [_law(20.0), _law(50.0, gap=60e-6), _law(20.0, accommodation=0.8), _law(20.0)]
+    group = RarefiedLaw.of_flows(laws, orifice=False)
+    assert np.ndim(group.land_m) == 1 and group.viscosity_Pa_s == MU  # (one value kept)
+    rng = np.random.default_rng(3)
+    x = rng.uniform(1e-3, 1.0, (5, len(laws)))
+    p1 = 10.0 ** rng.uniform(1.0, 5.0, (5, len(laws)))
+    r1 = p1 / RT
+    f_n = nozzle_f(x, GAMMA)
+    got = group.reduced_flux(f_n, x, p1, r1)
+    for i, law in enumerate(laws):
+        own = law.reduced_flux(f_n[:, i], x[:, i], p1[:, i], r1[:, i])
+        np.testing.assert_allclose(got[:, i], own, rtol=1e-14)
+
+
 def test_slot_has_a_knudsen_minimum_near_kn_1():
     # Gaede (1913) measured the minimum of a channel's conductance near Kn = 1 (quoted by
     # Beskok & Karniadakis); the slot's conductance m / (p1 - p2) at a small pressure drop

@@ -34,8 +34,17 @@ bench rerun after the fix (idle machine, both profiles in parallel, 5 min), at 2
 96 / 192 against its 768-point machine: suction 8.4e-5 / 2.7e-5 / 4.2e-6 / 1.9e-6
 (pin-cycloid) and 1.0e-4 / 2.6e-5 / 3.6e-5 / 1.5e-5 (circular), discharge 1.1e-4 /
 4.5e-5 / 9.1e-5 / 2.7e-5 and 2.2e-4 / 2.0e-4 / 3.4e-4 / 5.9e-5; CPU 2.64 / 4.22 / 6.63 /
-10.63 s and 3.54 / 4.09 / 5.82 / 11.73 s (two processes on two cores).  The rest as
-below.
+10.63 s and 3.54 / 4.09 / 5.82 / 11.73 s (two processes on two cores).  Rerun
+2026-11-30 with the reference's sealed regions swept 3072 times per period (768 before,
+whose phase jitter was ~1.1e-4 on the circular's discharge; both profiles in parallel,
+7 min), at 24 / 48 / 96 / 192: discharge 1.2e-4 / 4.3e-5 / 9.0e-5 / 1.9e-5
+(pin-cycloid) and 2.3e-4 / 1.1e-4 / 2.2e-4 / 1.6e-4 (circular: the 96's 3.4e-4 was
+partly the reference's, and the 192's 5.9e-5 partly luck of phase; the table's own sweep
+of one sliver's birth moves with its grid's phase by ~2e-4 at every resolution, README),
+suction 8.3e-5 / 3.2e-5 / 5.0e-6 / 4.7e-6 and 1.0e-4 / 2.7e-5 / 3.6e-5 / 1.5e-5; CPU
+2.51 / 3.36 / 6.02 / 11.74 s and 3.62 / 4.38 / 6.21 / 12.41 s (two processes on two
+cores); the error target met by the pin-cycloid from 48 on, by the circular nowhere,
+the time by neither.  The rest as below.
 
 Before (loaded 2-core machine, 1 core; other jobs on both), at 24 / 48 / 96 /
 192 points per period: CPU 2.73 / 3.31 / 4.72 / 10.08 s (pin-cycloid), 3.36 / 4.42 /
@@ -82,8 +91,13 @@ REFERENCE = 768
 #: grid, twice its points per period).  On one 24-point machine, 384 samples are 4e-5
 #: (pin-cycloid) and 1.9e-5 (circular) of the largest discharge area off it (the
 #: pin-cycloid's where 768 holds less than a union of real sections, geometry/
-#: port_areas.py); its own section grid (1536) costs a section cut per sample.
-REFERENCE_PORT_STEPS = 768
+#: port_areas.py); its own section grid (1536) costs a section cut per sample.  768 was
+#: not enough: a sliver born next to the cusp line (circular profile, 116 deg after the
+#: chamber's birth) is swept within 1e-4 of its limit only from ~3072 samples on, and at
+#: 768 its area moved by 1e-4 of the largest discharge area with the samples' phase (the
+#: reference machine's birth node, 0.001 rad off the 96-point machine's); 3072 moves the
+#: reference by 1.3e-4 there (4.5 min a sweep instead of 1).
+REFERENCE_PORT_STEPS = 3072
 #: The lines' reference.  From 384 points per period on, the pin-cycloid's interlobe
 #: lines to the chambers 4 and 6 periods on shrink by 4e-3 and 1.5e-2 (768) against
 #: their values at 24 to 192, which agree to 1e-7: the tracks' presence and offsets

@@ -10,10 +10,12 @@ before), the periods and how many carried the cycle solver's perturbed batch (Ne
 Jacobian; the rest integrate the state alone), the books, indicated power and eta_v.
 
 Measured 2026-11-30 (one process, the other core busy with a stress bench), at quality
-0.5 / 0.3 / 0.2 / 0.1 / 0.05: see README ("A CoolProp fluid is pumped wet").  Before
-this session's changes quality 0.05 took 82 s (15 periods, 9 with the batch): the
-batch's Newton steps landed across the bubble line, and the state's table was read
-twice a right-hand side (quasi1d/cycle.py PROBE_GAIN; quasi1d/model.py).
+0.5 / 0.3 / 0.2 / 0.1 / 0.05: all converged, 1.4 / 4.8 / 5.1 / 16.7 / 24.3 s, 4 / 4 / 4
+/ 9 / 9 periods of which 3 / 3 / 3 / 2 / 2 carried the batch, books within 4e-8.
+Before, quality 0.05 took 82 s (15 periods, 9 with the batch; the same machine): the
+batch's Newton steps landed across the bubble line and never beat the first iterate,
+and the state's table was read twice a right-hand side (quasi1d/cycle.py PROBE_GAIN;
+quasi1d/model.py).
 
     python -m bench.bench_wet_pump
 """
@@ -21,7 +23,6 @@ twice a right-hand side (quasi1d/cycle.py PROBE_GAIN; quasi1d/model.py).
 from __future__ import annotations
 
 import copy
-import csv
 import time
 from pathlib import Path
 
@@ -30,6 +31,8 @@ import CoolProp.CoolProp as CP
 from rotorflow.geometry.summary import build_machine, chamber_table
 from rotorflow.quasi1d import case_settings, cycle, simulate
 from rotorflow.workflow.case import case_from_raw, load_toml
+
+from .bench_quasi1d import _write_csv
 
 REPO = Path(__file__).resolve().parents[1]
 CASE = REPO / "examples" / "screw_pump_vacuum.toml"
@@ -79,11 +82,7 @@ def run(results_dir: Path) -> list[dict]:
                 "within_budget": f["converged"] and wall < BUDGET_S})
     finally:
         cycle.integrate_period = integrate
-    results_dir.mkdir(parents=True, exist_ok=True)
-    with (results_dir / "wet_pump.csv").open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    _write_csv(Path(results_dir) / "wet_pump.csv", rows)
     return rows
 
 

@@ -72,7 +72,7 @@ CHORD_GAIN = 0.1
 # then stepped with a stale Jacobian took twice damped Newton's periods (a leaky machine
 # whose map contracts by ~0.6 a period), and a first probe's cut of 3x sent two stress
 # points to Anderson, which converged one (CO2) and not the other in 22 periods.
-PROBE_GAIN = 0.25
+PROBE_GAIN = 0.25  # (0: no probe)
 
 
 @dataclass
@@ -334,7 +334,7 @@ def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figur
     if nw.best[3] is None or nw.lam < 1.0 / 16.0:
         return "stalled", None
     z_new = _damped(model, nw.best, idx, nw.lam)
-    if nw.lam < lam and not nw.probed:  # the first step that failed: probe the plain map
+    if nw.lam < lam and not nw.probed and PROBE_GAIN > 0.0:  # the first that failed
         nw.plain, nw.probed, nw.resume = nw.best[0], True, z_new
         return "step", nw.best[4]
     return "step", z_new

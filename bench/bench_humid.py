@@ -18,9 +18,11 @@ chamber's whole liquid in its shrinking volume and stopped small machines with "
 liquid fills the chamber before the discharge opens" (quasi1d/events.initial_state).
 Rerun 2026-11-30 with three jobs on the 2 cores: 59 converged; the slowest point (37,
 the one above) stopped at the 60-s budget after 6 periods with its residual at 8e-8
-(five periods of ros23 carrying its 61 states, 15 s each; 60 s alone on one core, the
-other busy): the budget's failure, not the solver's, which took the same steps as
-before (no Newton step failed, so the plain-iteration probe never ran).
+(ros23 carrying its 61 states, 15 s a period); alone on the idle machine 61.7 s, and
+the tree at the session's start stops there too (67 s, the same periods): its 39.5 s
+above is not reproduced, and this session's changes are not the cause (no Newton step
+failed there, so the plain-iteration probe never ran).  What it misses is the energy
+balance (2.9e-7 against 1e-7), its state having settled to 3e-8.
 Output: bench/results/humid_stress.csv.
 """
 

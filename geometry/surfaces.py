@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import planar
+
 #: A section vertex this close to a rotor's surface (per centre distance) lies on it: the
 #: families' polygons lie within their chord error (1e-6) and the twin screw's grown
 #: rotors (2e-6) of the true surfaces; vertices of a bore or a cut line lie farther off
@@ -154,12 +156,7 @@ def rotate(points, angle):
 
 def turn(points, angles):
     """points (m, 2) turned by each of angles (n,): (n, m, 2)."""
-    c, s = np.cos(angles)[:, None], np.sin(angles)[:, None]
-    x, y = points[..., 0], points[..., 1]
-    out = np.empty(np.broadcast_shapes(c.shape, x.shape) + (2,))
-    np.subtract(c * x, s * y, out=out[..., 0])
-    np.add(s * x, c * y, out=out[..., 1])
-    return out
+    return planar.rotate(points, np.asarray(angles)[:, None])
 
 
 def area(ring) -> float:

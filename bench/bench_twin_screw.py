@@ -18,7 +18,7 @@ geometry figures and table of a 4/6 pair at 1e-4 relative error in under 1 s.
 Measured 2026-11-29 (two profiles in parallel on the 2 cores): the port areas against
 polygons 16 times finer, at 24 / 48 points per period, discharge 3.44e-3 / 3.54e-3
 (pin-cycloid) and 5.88e-3 / 5.63e-3 (circular), suction 9.3e-5 / 8.1e-5 and 8.3e-4 /
-8.0e-4: neither profile meets the error at any resolution (README: two causes, both the
+8.0e-4: neither profile meets the error at any resolution (docs/twin_screw.md: two causes, both the
 grown rotors' overlap, located).  Fixed since (slivers swept from where the true
 surfaces touch, pieces' ends at the sections' contacts, geometry/footprint_gaps.py;
 measured by scripts, this bench not rerun): discharge 1.1e-4 / 7.1e-5 and 1.06e-3 /
@@ -40,7 +40,7 @@ whose phase jitter was ~1.1e-4 on the circular's discharge; both profiles in par
 7 min), at 24 / 48 / 96 / 192: discharge 1.2e-4 / 4.3e-5 / 9.0e-5 / 1.9e-5
 (pin-cycloid) and 2.3e-4 / 1.1e-4 / 2.2e-4 / 1.6e-4 (circular: the 96's 3.4e-4 was
 partly the reference's, and the 192's 5.9e-5 partly luck of phase; the table's own sweep
-of one sliver's birth moves with its grid's phase by ~2e-4 at every resolution, README),
+of one sliver's birth moves with its grid's phase by ~2e-4 at every resolution, docs/twin_screw.md),
 suction 8.3e-5 / 3.2e-5 / 5.0e-6 / 4.7e-6 and 1.0e-4 / 2.7e-5 / 3.6e-5 / 1.5e-5; CPU
 2.51 / 3.36 / 6.02 / 11.74 s and 3.62 / 4.38 / 6.21 / 12.41 s (two processes on two
 cores); the error target met by the pin-cycloid from 48 on, by the circular nowhere,

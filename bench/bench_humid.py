@@ -17,12 +17,13 @@ exchange).  It found a defect on its way: the cycle's first guess put a discharg
 chamber's whole liquid in its shrinking volume and stopped small machines with "the
 liquid fills the chamber before the discharge opens" (quasi1d/events.initial_state).
 Rerun 2026-11-30 with three jobs on the 2 cores: 59 converged; the slowest point (37,
-the one above) stopped at the 60-s budget after 6 periods with its residual at 8e-8
-(ros23 carrying its 61 states, 15 s a period); alone on the idle machine 61.7 s, and
-the tree at the session's start stops there too (67 s, the same periods): its 39.5 s
-above is not reproduced, and this session's changes are not the cause (no Newton step
-failed there, so the plain-iteration probe never ran).  What it misses is the energy
-balance (2.9e-7 against 1e-7), its state having settled to 3e-8.
+the one above) stopped at the 60-s budget after 6 periods (61.7 s alone on the idle
+machine).  Its batch periods carry 61 states through ros23 (15 s each), its chord
+periods the state alone (0.7 s); a chord period that cut the residual 2x brought the
+batch back (quasi1d/cycle.py CHORD_GAIN), and that batch ran out the budget.  Since
+(2026-11-30, cycle._chord_pays: chord periods go on while they reach CHORD_GAIN sooner
+than a batch would): 60 converged, none invalid, the slowest 42.3 s (point 37 39.5 s,
+6 periods, balances 1e-11 / 1.5e-10), median 0.80 s (another job on the other core).
 Output: bench/results/humid_stress.csv.
 """
 

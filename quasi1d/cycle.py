@@ -23,6 +23,8 @@ that a pump delivering nothing is still judged).
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import time
 from dataclasses import dataclass
 
@@ -215,7 +217,7 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
             Y0[np.arange(1, d + 1), idx] += dz
         ran, message = _budgeted_period(model, Y0, method, rtol, atol, replay, record, num,
                                         max(dp, dT, mc, ec) < FORCE_REPLAY_BELOW, deadline,
-                                        cycles)
+                                        cycles, nw.took)
         if ran is None:
             break
         run = ran
@@ -272,13 +274,17 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
 
 
 def _budgeted_period(model, Y0, method, rtol, atol, replay, record, num, force_replay,
-                     deadline, cycles):
+                     deadline, cycles, took):
     """(one period's run, "") or, once the time budget runs out inside a period after
-    the first, (None, the budget's message); the first has no state to return: OverTime."""
+    the first, (None, the budget's message); the first has no state to return: OverTime.
+    Its seconds go to took[0] (a batch) or took[1] (the state alone)."""
+    start = time.perf_counter()
     try:
-        return integrate_period(model, Y0, method, rtol, atol, replay=replay, record=record,
-                                max_steps=num.max_steps, force_replay=force_replay,
-                                deadline=deadline), ""
+        run = integrate_period(model, Y0, method, rtol, atol, replay=replay, record=record,
+                               max_steps=num.max_steps, force_replay=force_replay,
+                               deadline=deadline)
+        took[Y0.shape[0] == 1] = time.perf_counter() - start
+        return run, ""
     except OverTime as exc:
         budget = f"stopped at the time budget of {num.max_seconds:g} s ([numerics] max_seconds)"
         if not cycles:
@@ -300,6 +306,7 @@ class _NewtonState:
     probed: bool = False  # they have run (once a solve)
     plain_runs: int = 0  # plain periods that met PROBE_GAIN
     resume: np.ndarray | None = None  # Newton's next iterate, put off by them
+    took: list = dataclasses.field(default_factory=lambda: [np.inf, np.inf])  # s: batch, chord
 
     @property
     def batch(self) -> bool:
@@ -323,7 +330,7 @@ def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figur
     step = nw.best[3]
     nw.chord = (step is not None and nw.best[1] is z and nw.lam >= 1.0
                 and float(np.max(np.abs(step) / scales[idx])) < CHORD_BELOW
-                and not (was_chord and not norm <= CHORD_GAIN * nw.last))
+                and not (was_chord and not _chord_pays(norm / nw.last, nw.took)))
     nw.last = norm
     if nw.best[0] < 0.5 * nw.mark:
         nw.mark, nw.since_gain = nw.best[0], 0
@@ -338,6 +345,18 @@ def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figur
         nw.plain, nw.probed, nw.resume = nw.best[0], True, z_new
         return "step", nw.best[4]
     return "step", z_new
+
+
+def _chord_pays(gain: float, took) -> bool:
+    """Whether the next period is a chord one after a chord period that cut the
+    residual by ``gain``: it reached CHORD_GAIN, or chord periods at that gain would
+    reach it in less time than a batch period took (``took``: the last batch and chord
+    periods' seconds)."""
+    if gain <= CHORD_GAIN:
+        return True
+    if not gain < 1.0:
+        return False
+    return took[1] * math.log(CHORD_GAIN) / math.log(gain) < took[0]
 
 
 def _after_plain(model, nw: _NewtonState, run, z, z_next, idx, dz, norm, figures):

@@ -328,3 +328,18 @@ def test_an_implicit_solver_that_ends_at_negative_mass_is_an_error(table, monkey
     with pytest.raises(IntegrationError, match=r"radau left a chamber with negative mass "
                                                r"between [\d.]+ and [\d.]+ rad"):
         simulate(table, _op(), numerics=Numerics(integrator="radau", max_cycles=1))
+
+
+def test_chord_periods_go_on_while_they_reach_the_gain_sooner_than_a_batch():
+    """cycle._chord_pays: a chord period that cut the residual 2x is worth repeating when
+    a batch costs more than the log(0.1) / log(0.5) = 3.3 chord periods that reach
+    CHORD_GAIN (the humid stress point: batch 15 s, chord 0.7 s), not when it costs
+    less; one that reached CHORD_GAIN always is, one that did not gain never."""
+    from rotorflow.quasi1d import cycle
+
+    assert cycle._chord_pays(0.05, [1.0, 10.0])
+    assert cycle._chord_pays(0.5, [15.0, 0.7])
+    assert not cycle._chord_pays(0.5, [2.0, 0.7])  # 3.3 x 0.7 = 2.3 s > 2 s
+    assert cycle._chord_pays(0.5, [2.4, 0.7])
+    assert not cycle._chord_pays(1.0, [1e9, 1e-9])
+    assert not cycle._chord_pays(float("nan"), [1e9, 1e-9])

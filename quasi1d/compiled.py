@@ -101,7 +101,8 @@ def _helpers():
             flows.nozzle_f_c, flows.fanno_f, dry_air.table_interp, dry_air._lerp,
             coolprop_fluid.table_cell, coolprop_fluid.table_row, coolprop_fluid.table_state,
             coolprop_fluid._or_liquid, coolprop_bubble.liquid_state, kernel.fluid_state,
-            kernel.ideal_flow, kernel._add, kernel._node, chamber.spline_at,
+            kernel.ideal_flow, kernel._add, kernel._node, kernel._slots, kernel._oil_leak,
+            kernel._oil_heat, kernel._oil_exit, chamber.spline_at,
             stepping.err_norm, stepping.rk_step, stepping._grow, stepping.segment,
             stepping.ros23_step, stepping.jacobian, stepping._w_solve, kernel.rhs_segment,
             kernel.rk_step_fused, kernel.ros23_step_fused, kernel.rhs_fused)
@@ -110,8 +111,9 @@ def _helpers():
 def _inlined():
     from . import coolprop_bubble, coolprop_fluid, dry_air, kernel
 
-    return (kernel._add, kernel._node, kernel.fluid_state, dry_air.table_interp,
-            dry_air._lerp, coolprop_fluid.table_row, coolprop_fluid.table_state,
+    return (kernel._add, kernel._node, kernel._slots, kernel._oil_leak, kernel.fluid_state,
+            dry_air.table_interp, dry_air._lerp, coolprop_fluid.table_row,
+            coolprop_fluid.table_state,
             coolprop_fluid._or_liquid, coolprop_bubble.liquid_state)
 
 
@@ -198,21 +200,31 @@ def _compile():
 
 def warm_up() -> None:
     """Fill numba's cache: solve one small cycle of each fluid kind with the compiled
-    right-hand side (``python -m rotorflow.quasi1d.compiled``, ~80 s CPU once)."""
+    right-hand side (``python -m rotorflow.quasi1d.compiled``, ~80 s CPU once), and
+    evaluate the fused right-hand side on its own once (the cycles call it only inside
+    the compiled segments; :func:`_cached` asks for every entry, and without this one
+    the cache filled by ``make venv`` was never taken as filled: every process of a
+    fresh checkout ran in numpy until the tests had called it)."""
     from .settings import Leakage, Operating, Ports
-    from .simulate import simulate
+    from .simulate import build_model, simulate
     from .synthetic import sin2_table
 
     os.environ["ROTORFLOW_COMPILED"] = "1"
-    if kernel_for_point() is None:
+    fn = kernel_for_point()
+    if fn is None:
         raise SystemExit("numba is not installed: the model runs in numpy")
     table = sin2_table(rows=241)
     base = {"p_suction_bar": 1.0, "p_discharge_bar": 4.0, "T_suction_K": 300.0,
             "speed_rpm": 3000.0, "volume_ratio": 3.0}
-    for extra, ports in (({}, Ports()), ({"heat_capacity": "constant"},
-                                         Ports(model="nozzle"))):
-        simulate(table, Operating.from_section({**base, **extra}, "warm-up"),
-                 Leakage(gap_m=10e-6, model="nozzle"), ports)
+    leak = Leakage(gap_m=10e-6, model="nozzle")
+    for extra, ports in (({}, Ports()), ({"heat_capacity": "constant"}, Ports(model="nozzle")),
+                         ({"oil_mass_ratio": 2.0}, Ports())):
+        op = Operating.from_section({**base, **extra}, "warm-up")
+        res = simulate(table, op, leak, ports)
+        model = build_model(table, op, leak, ports)
+        model.fast["kernel"] = fn
+        seg = next(s for s in model.segments if model._fused_args(s) is not None)
+        model.rhs(seg.start, res.solution.y_start[None], seg)
 
 
 if __name__ == "__main__":

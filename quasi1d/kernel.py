@@ -6,7 +6,7 @@ The physics is written once, element-wise (the fluid's state :func:`fluid_state`
 nozzle and Fanno fluxes of :mod:`.flows`, the ideal port's flow :func:`ideal_flow`):
 numpy calls it on whole arrays of the batch (B, ...) in the model's piecewise
 right-hand side, with its other terms (calibrated or rarefied leakage, moving walls,
-oil) in between; :func:`rhs_fused`, compiled by numba (:mod:`.compiled`), calls it one
+oil, liquids) in between; :func:`rhs_fused`, compiled by numba (:mod:`.compiled`), calls it one
 element at a time inside loops over the batch, the slots and the flows.  Written in
 numpy style, the compiled function was bound by its ~60 temporaries a call and by
 dense products with the flow maps; the loops have none and add each flow to the five
@@ -133,8 +133,10 @@ def ideal_flow(A, Bh, rc, uc, pc, hc, prc, puc, Vc, Vtc, p_pl, h_pl, omega, rela
 
 def fusable(model, seg) -> bool:
     """The segment needs nothing but what :func:`rhs_fused` evaluates: nozzle or Fanno
-    leakage on static walls, gas only, a fluid with kernel parameters."""
-    return (not model.oil and seg.oil is None and not seg.walls and not seg.cou_gap.size
+    leakage on static walls, gas or gas with injected oil (:mod:`.oil`; no liquid
+    volume, no vapour), a fluid with kernel parameters."""
+    return (not model.vapour and not model.inv_rho_liquid and not seg.walls
+            and not seg.cou_gap.size
             and all(g.model in ("nozzle", "fanno") for g in seg.groups)
             and hasattr(model.fluid, "kernel_params"))
 
@@ -157,8 +159,9 @@ def _add(dy, b, sparse, i, v):
 
 # Rows of rhs_fused's node values (suction plenum, the slots, the discharge plenum):
 # the state, the nozzle constants of its kappa (critical ratio, 2k / (k - 1), 1 / k) and
-# sqrt(p rho), the slots' T and pressure derivatives.
-_P, _R, _H, _U, _XC, _CC, _IK, _S, _T, _PR, _PU = range(11)
+# sqrt(p rho), the slots' T and pressure derivatives; with oil (.oil) its mass and
+# enthalpy per gas mass, its heat to the gas and the gas leaving through a discharge port.
+_P, _R, _H, _U, _XC, _CC, _IK, _S, _T, _PR, _PU, _X, _Y, _QO, _OUT = range(15)
 
 
 def _node(W, j, p, rho, h, kap):
@@ -169,14 +172,15 @@ def _node(W, j, p, rho, h, kap):
 
 def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, ib,
               fanno, zeta, x_choke, maps, acc_w, acc_q, c, p_pl, h_pl, ideal_maps, plen,
-              kind, par, tab, gamma):
+              kind, par, tab, gamma, oil):
     """dy/dtheta of a fusable segment (see :meth:`.model.ChamberModel.rhs`): y (B, S);
     the geometry of the active slots at the angle (V, 1/V, dV/dtheta, dV/dt, the flows'
     areas, heat transfer coefficient times area or an empty array); the flows' nodes and
     laws (Fanno where ``fanno``); the flows' and the ideal ports' maps into dy
     (:func:`scatter` of mm, me, mg and of mx, mxe); the ideal ports (slots c); the
     plenums' p, rho, h, kappa (plen (4, 2)); the fluid (kind, par, tab; gamma > 0 a
-    perfect gas).
+    perfect gas); the injected oil (:func:`.oil.fused_args`: its leakage with the gas,
+    its heat to the gas, its exit through the discharge port).
 
     Loops over the batch, the slots and the flows, calling the physics one element at a
     time (:func:`fluid_state`, :func:`.flows.nozzle_f_c`, :func:`.flows.fanno_f`,
@@ -185,19 +189,18 @@ def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, 
     only (sqrt(p rho), the nozzle's constants) is evaluated per node, not per flow."""
     B = y.shape[0]
     dy = np.zeros(y.shape)
-    W = np.empty((11, na + 2))  # node values of one batch member
+    W = np.empty((15, na + 2))  # node values of one batch member
     _node(W, 0, plen[0, 0], plen[1, 0], plen[2, 0], plen[3, 0])
     _node(W, na + 1, plen[0, 1], plen[1, 1], plen[2, 1], plen[3, 1])
     x_id = np.empty(c.size)
     h_id = np.empty(c.size)
+    on, split, nl, flags = oil[0], oil[1], oil[2], oil[8]
+    nf = ia.size
+    if on:
+        W[_X, 0] = W[_Y, 0] = 0.0  # (the suction plenum's gas is dry)
+        W[_X, na + 1], W[_Y, na + 1] = oil[6], oil[7]
     for b in range(B):
-        for k in range(na):
-            m = y[b, k]
-            rho = m * iV[k]
-            u = y[b, n + k] / m
-            p, T, kap, pr, pu = fluid_state(kind, par, tab, rho, u)
-            _node(W, k + 1, p, rho, u * gamma if gamma > 0.0 else u + p / rho, kap)
-            W[_U, k + 1], W[_T, k + 1], W[_PR, k + 1], W[_PU, k + 1] = u, T, pr, pu
+        _slots(W, y, b, n, na, iV, kind, par, tab, gamma, on)
         for f in range(ia.size):
             if not area[f] > 0.0:  # a line that does not exist at this angle
                 continue
@@ -211,6 +214,10 @@ def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, 
                 fx = flows.nozzle_f_c(x, W[_XC, up], W[_CC, up], W[_IK, up])
             F = W[_S, up] * fx * area[f]
             F = F if fwd else -F
+            if split and f < nl:  # a homogeneous gas-oil mixture leaks (.oil)
+                F = _oil_leak(dy, b, maps, nf + f, F, W, ia[f] if F >= 0.0 else ib[f])
+            elif on and flags[f]:  # (the oil leaves with the gas, _oil_exit)
+                W[_OUT, a] += max(F, 0.0)
             _add(dy, b, maps[0], f, F)
             _add(dy, b, maps[1], f, F * (W[_H, a] if F > 0.0 else W[_H, d]))
             _add(dy, b, maps[2], f, abs(F))
@@ -227,6 +234,8 @@ def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, 
                 dy[b, n + k] += q * w
                 heat += q
             dy[b, acc_q] = heat * w
+        if on:
+            _oil_heat(dy, b, y, n, na, W, oil, w)
         for i in range(c.size):
             k = c[i]
             x_id[i], h_id[i] = ideal_flow(
@@ -236,7 +245,62 @@ def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, 
         for i in range(c.size):
             _add(dy, b, ideal_maps[0], i, x_id[i])
             _add(dy, b, ideal_maps[1], i, x_id[i] * h_id[i])
+        if on:
+            _oil_exit(dy, b, y, n, na, W, oil, x_id, c, nf, w)
     return dy
+
+
+def _slots(W, y, b, n, na, iV, kind, par, tab, gamma, on):
+    """The slots' node values (W's columns 1..na) of batch member b."""
+    for k in range(na):
+        m = y[b, k]
+        rho = m * iV[k]
+        u = y[b, n + k] / m
+        p, T, kap, pr, pu = fluid_state(kind, par, tab, rho, u)
+        _node(W, k + 1, p, rho, u * gamma if gamma > 0.0 else u + p / rho, kap)
+        W[_U, k + 1], W[_T, k + 1], W[_PR, k + 1], W[_PU, k + 1] = u, T, pr, pu
+        if on:
+            W[_X, k + 1], W[_Y, k + 1] = y[b, 2 * n + k] / m, y[b, 3 * n + k] / m
+            W[_OUT, k + 1] = 0.0
+
+
+def _oil_leak(dy, b, maps, row, F, W, up):
+    """:func:`.oil.homogeneous_split` of a leakage flow (the gas-only flow F, from node
+    ``up``): its oil added to dy through the maps' oil rows ``row``; returns the gas's
+    part."""
+    Fg = F / np.sqrt(1.0 + max(W[_X, up], 0.0))
+    Fo = Fg * W[_X, up]
+    _add(dy, b, maps[0], row, Fo)
+    _add(dy, b, maps[1], row, Fg * W[_Y, up])
+    _add(dy, b, maps[2], row, abs(Fo))
+    return Fg
+
+
+def _oil_heat(dy, b, y, n, na, W, oil, w):
+    """The oil's heat to the gas of every slot (W's _QO row), as the model's."""
+    cp, datum, tau = oil[3], oil[4], oil[5]
+    for k in range(na):
+        q = (y[b, 3 * n + k] - y[b, 2 * n + k] * cp * (W[_T, k + 1] - datum)) / tau
+        W[_QO, k + 1] = q
+        dy[b, n + k] += q * w
+
+
+def _oil_exit(dy, b, y, n, na, W, oil, x_id, c, nf, w):
+    """:func:`.oil.slot_balances` for one batch member: the oil leaves each slot with the
+    gas that flows out through a discharge port (the ideal ports' x_id; the nozzle
+    ports' flows are in W's _OUT row already)."""
+    flags, acc_mo, acc_ho = oil[8], oil[9], oil[10]
+    for i in range(c.size):
+        if flags[nf + i]:
+            W[_OUT, c[i] + 1] += max(-x_id[i], 0.0)
+    for k in range(na):
+        mo, Ho = y[b, 2 * n + k], y[b, 3 * n + k]
+        frac = W[_OUT, k + 1] / y[b, k]
+        Hx = Ho * frac
+        dy[b, 2 * n + k] -= mo * frac * w
+        dy[b, 3 * n + k] -= (W[_QO, k + 1] + Hx) * w
+        dy[b, acc_mo] += mo * frac * w
+        dy[b, acc_ho] += Hx * w
 
 
 # -- one segment in one compiled call (issue 19) ---------------------------------------

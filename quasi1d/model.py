@@ -43,7 +43,7 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
-from . import events, flows, humid, kernel, liquid
+from . import events, flows, humid, kernel, liquid, oil
 from .chamber import ChamberGeometry
 from .heat import WALL_AREA_FACTOR, WallHeat, wall_heat
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_Q, ACC_W, AccColumns, Segment, segments
@@ -346,12 +346,16 @@ class ChamberModel:
                 s, d = self.suc, self.dis
                 plen = np.array([[s.p, d.p], [s.rho, d.rho], [s.h, d.h], [s.kappa, d.kappa]])
                 acc0 = self.nv * self.n
+                oil_args, oil_maps = oil.fused_args(self, seg)
+                maps = (seg.mm, seg.me, seg.mg)
+                if oil_maps is not None:  # (rows n_flows + f: kernel._oil_leak)
+                    maps = tuple(np.vstack(m) for m in zip(maps, oil_maps, strict=True))
                 args = (seg.ia, seg.ib, fanno, zeta, x_choke,
-                        tuple(kernel.scatter(m) for m in (seg.mm, seg.me, seg.mg)),
+                        tuple(kernel.scatter(m) for m in maps),
                         acc0 + ACC_W, acc0 + ACC_Q, seg.ideal, seg.ideal_p, seg.ideal_h,
                         (kernel.scatter(seg.mx), kernel.scatter(seg.mxe)), plen,
                         *self.fluid.kernel_params(),
-                        self.fluid.gamma if self.ideal_gas else 0.0)
+                        self.fluid.gamma if self.ideal_gas else 0.0, oil_args)
             self.fast[key] = args
         return self.fast[key]
 

@@ -177,3 +177,29 @@ def flooded_discharge_T(fluid, suc, op, x: float) -> float:
     R = op.p_suction_Pa / (suc.rho * T1g)
     T1 = (cp * T1g + x * co * op.oil_temperature_K) / (cp + x * co)
     return T1 * op.pressure_ratio ** (R / (cp + x * co))
+
+
+def fused_args(model, seg) -> tuple:
+    """The oil's arguments of the compiled right-hand side (:func:`.kernel.rhs_fused`):
+    (oil injected, its leakage split off the gas's, leakage flows, c_oil, the enthalpy's
+    datum temperature, the exchange time constant, the discharge plenum's X and Y,
+    flags (per flow: a nozzle discharge port; then per ideal port: the discharge's), the
+    delivered oil's accumulator columns), the same types without oil (one compiled
+    specialisation, scalars but one array: each array argument costs a compiled call
+    two atomic reference counts); and the oil's leakage maps (mm, me, mg), which
+    :meth:`.model.ChamberModel._fused_args` appends to the gas's as rows n_flows + f
+    (None without them)."""
+    op, n, c = model.op, model.n, model.acc_cols
+    on = bool(model.oil)
+    split = on and seg.oil is not None
+    acc0 = model.nv * n
+    x_dis = model.liquid_ratio if on else 0.0
+    y_dis = x_dis * op.oil_cp_J_kgK * (model.dis.T - model.liquid_datum_K) if on else 0.0
+    nf = seg.ia.size
+    flags = np.zeros(nf + seg.ideal.size, dtype=np.int8)
+    flags[seg.dis_port] = 1
+    flags[nf:][np.asarray(seg.ideal_is_dis, dtype=bool)] = 1
+    args = (on, split, int(seg.n_leak), float(op.oil_cp_J_kgK), float(model.liquid_datum_K),
+            float(op.oil_time_constant_s), float(x_dis), float(y_dis), flags,
+            acc0 + c.oil_m_out if on else 0, acc0 + c.oil_h_out if on else 0)
+    return args, ((seg.oil.mm, seg.oil.me, seg.oil.mg) if split else None)

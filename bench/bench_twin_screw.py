@@ -44,7 +44,20 @@ of one sliver's birth moves with its grid's phase by ~2e-4 at every resolution, 
 suction 8.3e-5 / 3.2e-5 / 5.0e-6 / 4.7e-6 and 1.0e-4 / 2.7e-5 / 3.6e-5 / 1.5e-5; CPU
 2.51 / 3.36 / 6.02 / 11.74 s and 3.62 / 4.38 / 6.21 / 12.41 s (two processes on two
 cores); the error target met by the pin-cycloid from 48 on, by the circular nowhere,
-the time by neither.  The rest as below.
+the time by neither.  Measured 2026-11-30 (scripts, one process at a time; this bench
+not rerun): the circular's 96 figure was mostly the reference's.  Its sweep of the
+sliver born 116 deg after the chamber (next to the cusp line) left 0.047-0.059 mm2 of
+what the chamber's own sections cover there (their union every 1e-5 rad, with
+polygons 16 times finer) out at every phase: for its first 0.006 rad the sliver's
+pieces were carried from their cusp-line ends back to its contact and closed on
+themselves (geometry/surfaces.py _to_contacts; fixed).  The table's own sweep was
+unchanged at 24 / 48 / 96 (at 192 it moved by 2e-5): against the fixed reference the
+circular's discharge is 4.9e-4 / 1.8e-4 / 6.2e-5 / 1.7e-4 (suction 1.0e-4 / 2.7e-5 /
+3.6e-5 / 1.5e-5, unchanged), the pin-cycloid's all as above.  The circular's 24 and 48
+are the table's own under-sweep of that sliver (0.13 and 0.05 mm2 above the reference
+at its nodes: the pieces' cusp-line ends are moved back by their neighbours' moves,
+README), which the old reference hid by missing the same patch.  CPU at 24 1.77 and
+2.18 s (1.75 and 2.14 before, least of 3, load average 2.7).  The rest as below.
 
 Before (loaded 2-core machine, 1 core; other jobs on both), at 24 / 48 / 96 /
 192 points per period: CPU 2.73 / 3.31 / 4.72 / 10.08 s (pin-cycloid), 3.36 / 4.42 /

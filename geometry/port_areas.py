@@ -59,6 +59,16 @@ to the sections' contacts (:mod:`.footprint_gaps`, :mod:`.footprint`):
 and against each machine's own sealed regions swept 768 times per period (the figures
 above are the earlier code's against the 768-point machine): discharge 1.1e-4 / 4.5e-5
 (pin-cycloid), 2.4e-4 / 9.4e-5 (circular); suction 8.4e-5 / 2.7e-5, 1.0e-4 / 2.6e-5.
+
+Measured 2026-11-30, against the 768-point machine swept 3072 times per period once a
+sliver's cusp-line ends were no longer carried back to its own contact
+(:func:`.surfaces.chains`; the reference had left 0.05 mm2 of the circular's sliver born
+116 deg after the chamber unswept), at 24 / 48 / 96 / 192: circular discharge 4.9e-4 /
+1.8e-4 / 6.2e-5 / 1.7e-4 (2.3e-4 / 1.1e-4 / 2.2e-4 / 1.6e-4 against the old reference,
+the table's own areas the same at 24 / 48 / 96), suction 1.0e-4 / 2.7e-5 / 3.6e-5 /
+1.5e-5; pin-cycloid discharge 1.2e-4 / 4.3e-5 / 9.0e-5 / 1.9e-5, suction 8.3e-5 /
+3.2e-5 / 5.0e-6 / 4.7e-6 (unchanged).  The circular's 24 and 48 are that sliver swept
+short by the table: its pieces' cusp-line ends take their neighbours' moves.
 """
 
 from __future__ import annotations

@@ -117,3 +117,23 @@ def test_the_sweep_holds_a_films_tip_along_the_contact_path():
     m = circular()
     box = (np.array([0.0455, -0.010]), np.array([0.0485, -0.007]))
     assert _worst(m, 15.0, 22.5, box) < 40e-6
+
+
+def test_a_slivers_end_on_the_cusp_line_is_not_carried_to_its_contact():
+    """A sliver born 116 deg after the chamber's birth, below the line of centres, runs
+    from its contact to the cusp line, where its male and female pieces meet across a
+    few microns of the line.  For its first 0.006 rad the contact lies within
+    CONTACT_REACH of the cusp-line ends too: each piece's end there was carried back
+    to it, and each piece closed on itself (contact, cusp end, ..., contact); the
+    bands of such pieces left 0.05 mm2 of the sliver's sweep out at 3072 samples per
+    period.  Each contact is one end's: the nearer."""
+    m = circular()
+    smp = _sweeper(m).sample(-1.3391606)  # rad: 0.0056 after the sliver is first held
+    xc = m.pair.cusp[0]
+    near = [c for c in smp.chains if np.any(np.abs(c.points[:, 0] - xc) < 1e-9)
+            and -0.0125 < c.points[:, 1].min() and c.points[:, 1].max() < -0.0115]
+    assert sorted(c.rotor for c in near) == [0, 1]
+    for c in near:
+        assert np.linalg.norm(c.points[0] - c.points[-1]) > 5e-4
+        cusp = 0 if abs(c.points[0, 0] - xc) < 1e-9 else 1
+        assert not c.contact_ends[cusp] and c.contact_ends[1 - cusp], c.contact_ends

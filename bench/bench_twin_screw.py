@@ -56,8 +56,14 @@ circular's discharge is 4.9e-4 / 1.8e-4 / 6.2e-5 / 1.7e-4 (suction 1.0e-4 / 2.7e
 3.6e-5 / 1.5e-5, unchanged), the pin-cycloid's all as above.  The circular's 24 and 48
 are the table's own under-sweep of that sliver (0.13 and 0.05 mm2 above the reference
 at its nodes: the pieces' cusp-line ends are moved back by their neighbours' moves,
-README), which the old reference hid by missing the same patch.  CPU at 24 1.77 and
-2.18 s (1.75 and 2.14 before, least of 3, load average 2.7).  The rest as below.
+docs/twin_screw.md), which the old reference hid by missing the same patch.  CPU at 24
+1.77 and 2.18 s (1.75 and 2.14 before, least of 3, load average 2.7).  This bench rerun
+the same day (one process, another job on the other core) gives the same figures:
+discharge 1.20e-4 / 4.33e-5 / 9.02e-5 / 1.92e-5 (pin-cycloid) and 4.92e-4 / 1.83e-4 /
+6.20e-5 / 1.73e-4 (circular), suction 8.3e-5 / 3.2e-5 / 5.0e-6 / 4.7e-6 and 1.03e-4 /
+2.7e-5 / 3.6e-5 / 1.5e-5; against polygons 16 times finer at 24 / 48, discharge
+1.10e-4 / 7.0e-5 and 1.06e-3 / 4.5e-4, suction 1.14e-4 / 5.5e-5 and 2.4e-5 / 2.4e-5;
+CPU 2.88 / 4.05 / 5.97 / 12.68 s and 3.84 / 4.71 / 6.87 / 15.57 s.  The rest as below.
 
 Before (loaded 2-core machine, 1 core; other jobs on both), at 24 / 48 / 96 /
 192 points per period: CPU 2.73 / 3.31 / 4.72 / 10.08 s (pin-cycloid), 3.36 / 4.42 /

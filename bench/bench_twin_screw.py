@@ -63,7 +63,15 @@ discharge 1.20e-4 / 4.33e-5 / 9.02e-5 / 1.92e-5 (pin-cycloid) and 4.92e-4 / 1.83
 6.20e-5 / 1.73e-4 (circular), suction 8.3e-5 / 3.2e-5 / 5.0e-6 / 4.7e-6 and 1.03e-4 /
 2.7e-5 / 3.6e-5 / 1.5e-5; against polygons 16 times finer at 24 / 48, discharge
 1.10e-4 / 7.0e-5 and 1.06e-3 / 4.5e-4, suction 1.14e-4 / 5.5e-5 and 2.4e-5 / 2.4e-5;
-CPU 2.88 / 4.05 / 5.97 / 12.68 s and 3.84 / 4.71 / 6.87 / 15.57 s.  The rest as below.
+CPU 2.88 / 4.05 / 5.97 / 12.68 s and 3.84 / 4.71 / 6.87 / 15.57 s.  Measured 2026-11-30
+after the sliver vertices whose gap to their ring never closes are swept from where
+they touch the other rotor's true surface (geometry/footprint_gaps.py; scripts, this
+bench not rerun), against the reference rebuilt with it (its areas moved by 4e-5 at
+most), at 24 / 48 / 96: discharge 5.2e-5 / 3.6e-5 / 9.6e-5 (pin-cycloid) and 2.2e-4 /
+7.3e-5 / 5.1e-5 (circular), suction 7.9e-5 / 2.5e-5 / 7.3e-6 and 1.0e-4 / 2.7e-5 /
+3.6e-5 (before, against the same reference: discharge 1.6e-4 / 7.2e-5 / 1.1e-4 and
+5.3e-4 / 2.2e-4 / 1.0e-4, suction 7.9e-5 / 5.3e-5 / 2.6e-5 and the circular's the
+same); CPU at 24 1.80 and 2.19 s (1.76 and 2.15 before, least of 3).  The rest as below.
 
 Before (loaded 2-core machine, 1 core; other jobs on both), at 24 / 48 / 96 /
 192 points per period: CPU 2.73 / 3.31 / 4.72 / 10.08 s (pin-cycloid), 3.36 / 4.42 /

@@ -173,7 +173,7 @@ class Events(Gaps):
         band = ring_section(np.concatenate([pts[found], moved[::-1]]))
         return [] if band is None else [band]
 
-    def _births(self, ring, cls, chain, dpsi, reach) -> np.ndarray:
+    def _births(self, ring, cls, chain, dpsi, reach, psi=None) -> np.ndarray:
         """Per vertex of ``chain`` (a piece of a sliver found born or dying |dpsi| away,
         by the median of its gap), the rigid move (signed) to where its own surfaces
         touch: a sliver may open along its length over a while (a zipper), and the
@@ -188,7 +188,7 @@ class Events(Gaps):
         before its median gap at 48 steps per period), and the vertices beyond the
         scan were swept from its end, late."""
         own, found = self._closing(ring, cls, chain.rotor, chain.points, reach,
-                                   _contacts_in(chain), BIRTH_ROUNDS)
+                                   _contacts_in(chain), BIRTH_ROUNDS, psi)
         return own if found.any() else np.full(len(chain.points), dpsi)
 
     def _rigid(self, smp, ring_index, dpsi, kind, reach):
@@ -204,7 +204,7 @@ class Events(Gaps):
         for c in smp.chains:
             if c.ring == ring_index:
                 if kind == "sliver":
-                    own = self._births(ring, cls, c, dpsi, reach)
+                    own = self._births(ring, cls, c, dpsi, reach, smp.psi)
                     axis, ratio = self.surfaces.rotors[c.rotor][:2]
                     moved = _turn((c.points - axis)[:, None], ratio * own)[:, 0] + axis
                 else:

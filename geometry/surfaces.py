@@ -72,6 +72,36 @@ class Surfaces:
         axis, ratio = self.rotors[rotor][:2]
         return rotate(points - axis, ratio * dpsi) + axis
 
+    def outside(self, k: int, points, psi) -> np.ndarray:
+        """Signed distance of each point (fixed frame) to rotor k's true profile placed
+        at each reference angle ``psi`` (positive outside it): the nearest sample's
+        edges resampled FILM_REFINE times finer (chord error 1.5e-9 m on the 4/6 pairs,
+        below the twin screw's growth)."""
+        axis, ratio, u, p, tree, n = self.rotors[k][:6]
+        x = planar.rotate(np.asarray(points, dtype=float) - axis,
+                          -ratio * np.asarray(psi, dtype=float))
+        _, j = tree.query(x)
+        lo = u[j] - np.mod(u[j] - u[j - 1], n)
+        hi = u[j] + np.mod(u[(j + 1) % len(u)] - u[j], n)
+        grid = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, 2 * FILM_REFINE + 1)
+        q = self.profiles[k].point(np.mod(grid, n).ravel()).reshape(*grid.shape, 2)
+        a, ab = q[:, :-1], np.diff(q, axis=1)
+        xa = x[:, None] - a
+        t = np.clip(np.einsum("vek,vek->ve", xa, ab)
+                    / np.maximum(np.einsum("vek,vek->ve", ab, ab), 1e-300), 0.0, 1.0)
+        d = np.linalg.norm(xa - t[..., None] * ab, axis=-1)
+        e = np.argmin(d, axis=1)
+        v = np.arange(len(x))
+        side = np.sign(ab[v, e, 0] * xa[v, e, 1] - ab[v, e, 1] * xa[v, e, 0])
+        return -side * d[v, e] * self._turning(k)
+
+    def _turning(self, k: int) -> float:
+        """+1 where rotor k's sampled profile runs counter-clockwise, else -1."""
+        memo = self.__dict__.setdefault("_senses", {})
+        if k not in memo:
+            memo[k] = 1.0 if area(self.rotors[k][3]) > 0.0 else -1.0
+        return memo[k]
+
     def classify(self, ring: np.ndarray, psi: float):
         """(rotor or -1, profile parameter) of each vertex of ``ring`` at angle psi."""
         dist = np.full((len(self.rotors), len(ring)), np.inf)

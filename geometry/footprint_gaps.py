@@ -248,25 +248,21 @@ class Gaps:
         return at, hit, touched
 
     def _mate_each(self, rotor, x, dpsi, psi) -> np.ndarray:
-        """:meth:`_mate_gaps` of each point x[v] moved by dpsi[v]."""
+        """Signed distance of each point x[v] of rotor ``rotor``, moved rigidly by
+        dpsi[v] from the sample at ``psi``, to the other rotors' true surfaces there
+        (positive outside them)."""
         axis, ratio = self.surfaces.rotors[rotor][:2]
+        dpsi = np.broadcast_to(np.asarray(dpsi, dtype=float), (len(x),))
         y = planar.rotate(x - axis, ratio * dpsi) + axis
         return np.min([self.surfaces.outside(c, y, psi + dpsi)
                        for c in range(len(self.surfaces.rotors)) if c != rotor], axis=0)
 
     def _mate_gaps(self, rotor, x, dpsi, psi) -> np.ndarray:
-        """Signed distance (len(dpsi), len(x)) of points x of rotor ``rotor``, each moved
-        rigidly by each dpsi from the sample at ``psi``, to the other rotors' true
-        surfaces there (positive outside them)."""
-        axis, ratio = self.surfaces.rotors[rotor][:2]
-        y = _turn(x - axis, ratio * np.asarray(dpsi)) + axis
-        at = np.broadcast_to(psi + np.asarray(dpsi)[:, None], y.shape[:2])
-        out = np.full(y.shape[:2], np.inf)
-        for c in range(len(self.surfaces.rotors)):
-            if c != rotor:
-                g = self.surfaces.outside(c, y.reshape(-1, 2), at.ravel())
-                out = np.minimum(out, g.reshape(y.shape[:2]))
-        return out
+        """:meth:`_mate_each` (len(dpsi), len(x)) of points x each moved by each dpsi."""
+        dpsi = np.asarray(dpsi, dtype=float)
+        flat = self._mate_each(rotor, np.tile(x, (len(dpsi), 1)), np.repeat(dpsi, len(x)),
+                               psi)
+        return flat.reshape(len(dpsi), len(x))
 
     def _mate_touching(self, rotor, x, ds, psi):
         """(move, whether found) per point of x (rotor ``rotor``'s, at the sample

@@ -206,7 +206,7 @@ def warm_up() -> None:
     the cache filled by ``make venv`` was never taken as filled: every process of a
     fresh checkout ran in numpy until the tests had called it)."""
     from .settings import Leakage, Operating, Ports
-    from .simulate import build_model, simulate
+    from .simulate import simulate
     from .synthetic import sin2_table
 
     os.environ["ROTORFLOW_COMPILED"] = "1"
@@ -220,11 +220,10 @@ def warm_up() -> None:
     for extra, ports in (({}, Ports()), ({"heat_capacity": "constant"}, Ports(model="nozzle")),
                          ({"oil_mass_ratio": 2.0}, Ports())):
         op = Operating.from_section({**base, **extra}, "warm-up")
-        res = simulate(table, op, leak, ports)
-        model = build_model(table, op, leak, ports)
-        model.fast["kernel"] = fn
+        sol = simulate(table, op, leak, ports).solution  # (its model holds the kernel)
+        model = sol.model
         seg = next(s for s in model.segments if model._fused_args(s) is not None)
-        model.rhs(seg.start, res.solution.y_start[None], seg)
+        model.rhs(seg.start, sol.y_start[None], seg)
 
 
 if __name__ == "__main__":

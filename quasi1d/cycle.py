@@ -23,10 +23,9 @@ that a pump delivering nothing is still judged).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -306,7 +305,7 @@ class _NewtonState:
     probed: bool = False  # they have run (once a solve)
     plain_runs: int = 0  # plain periods that met PROBE_GAIN
     resume: np.ndarray | None = None  # Newton's next iterate, put off by them
-    took: list = dataclasses.field(default_factory=lambda: [np.inf, np.inf])  # s: batch, chord
+    took: list = field(default_factory=lambda: [np.inf, np.inf])  # s: batch, chord
 
     @property
     def batch(self) -> bool:

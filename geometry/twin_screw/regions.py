@@ -42,6 +42,7 @@ from ..curves import sample
 from ..planar import TWO_PI, rotate
 from .ages import GrooveAges
 from .boundaries import FEMALE, LENS_MATCH, MALE, Boundaries
+from .window import GrooveWindow
 
 #: Coordinates run in units of C / UNITS inside Clipper (it rounds to 1e-8).
 UNITS = 1000.0
@@ -208,14 +209,17 @@ class SectionCutter(GrooveAges, Boundaries):
         the 4/6 pin-cycloid; 11.5 and 6.6 on the circular)."""
         from manifold3d import CrossSection, FillRule
 
-        rings = [np.ascontiguousarray(self.rotor_at(r, self._rotor_data[r].polygon, psi)
-                                      * self.k) for r in (MALE, FEMALE)]
+        # (the grooves out of the mesh's reach are left out, and booked turned: :mod:`.window`)
+        covered = [self.window.out_of_reach(r, psi) for r in (MALE, FEMALE)]
+        rings = [np.ascontiguousarray(self.window.ring(r, psi, covered[r]) * self.k)
+                 for r in (MALE, FEMALE)]
         # The bores' ring, both rotors' reversed: winding +1 in the fluid alone (one
         # Clipper sweep, 1.45 ms against 2.05 for building the rotors and subtracting).
         fluid = CrossSection([*self._bores, *(q[::-1].copy() for q in rings)],
                              FillRule.Positive)
         self._runs = []
         parts, pending = self._pieces(fluid, psi)
+        parts += self._turned(covered, psi)
         if polygons_only:
             light = self._light_parts(pending, psi, rings)
             return [p for p in (light[p] if isinstance(p, int) else p for p in parts)
@@ -298,6 +302,20 @@ class SectionCutter(GrooveAges, Boundaries):
                 out[i] = part
         return out
 
+    def _turned(self, covered, psi) -> list[Part]:
+        """The whole grooves ``covered`` (per rotor) as Parts, turned from the one held."""
+        out = []
+        for rotor, grooves in zip((MALE, FEMALE), covered, strict=True):
+            for k in grooves:
+                out.append(self._whole_groove(rotor, None, psi,
+                                              self.window.turned(rotor, k, psi)))
+                out[-1].piece = -len(out)  # (pieces of their own)
+        return out
+
+    @cached_property
+    def window(self) -> GrooveWindow:
+        return GrooveWindow(self)
+
     def _isolated(self, rotor, x0, x1) -> bool:
         """A piece wholly beyond the other bore's reach is one whole groove, bounded by
         its rotor and its bore alone."""
@@ -349,6 +367,7 @@ class SectionCutter(GrooveAges, Boundaries):
         # Two lobes: both grooves lie between the same two tips; the centroid of a
         # groove spanning half a turn lies within it.
         groove, age = self._groove_age(rotor, rings, psi, "", groove=int(k) if n > 2 else None)
+        self.window.keep(rotor, groove, rings, psi)
         # The fluid runs clockwise along the rotor, from the groove's counter-clockwise
         # tip (k + 1) to its clockwise one (k).
         a, b = tips[(groove + 1) % n], tips[groove]

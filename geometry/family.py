@@ -82,6 +82,13 @@ class RotorPair(ABC):
         return 2.0 * math.pi / self.rotors[0].lobes
 
     @property
+    def film_deficit(self) -> float:
+        """How much thinner (per centre distance) a film between the two rotors is in
+        :meth:`chamber_polygons` than between the true surfaces: 0 where the sections'
+        polygons lie on the surfaces within their chord error."""
+        return 0.0
+
+    @property
     def split_phase(self) -> float:
         """Reference-rotor angle after birth (and before death) over which the chamber's
         section is split into sub-regions that move fast; 0 when it never is."""

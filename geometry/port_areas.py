@@ -19,56 +19,10 @@ the sealed region's edge, several times per section step near its largest value;
 interpolation alone erred by up to 5.8e-4 (pin-cycloid) and 1.1e-3 (circular) of the
 largest area at 24 points per period.
 
-Measured on the 4/6 pairs of bench/bench_twin_screw.py at 24 / 48 / 96 / 192 points
-per period, against the machine of 768 points per period swept 768 times per period,
-the largest error over the table's nodes per largest area (the bench's docstring has
-the latest figures):
-
-    pin-cycloid  suction    7.8e-5  2.7e-5  1.9e-5  1.9e-6
-                 discharge  3.3e-5  5.3e-5  8.8e-5  6.4e-5   (Hermite only: 5.4e-4 3.8e-4)
-    circular     suction    1.2e-4  4.3e-5  3.6e-5  2.7e-5
-                 discharge  4.9e-4  2.7e-4  8.1e-5  1.0e-4   (Hermite only: 1.05e-3 1.56e-3)
-
-The circular's discharge is 4.9e-4 off at 24 with every node cut: there the sealed
-region's sweep is the limit.  On one machine (24 points per period) against its own
-sweep at 768 samples per period it errs by 4.5e-4, 2.3e-4, 4.4e-5, 1.9e-5 at 48, 96,
-192, 384 (6.9e-4, 3.7e-4, 2.8e-4, 1.7e-4 before the film's vertices were told by the
-true profiles and corners' turns were sampled, :mod:`.surfaces`, :mod:`.footprint`).
-What is left at 48 lies along the contact path below the line of centres: a sliver
-born next to the cusp line 116 deg after the chamber (0.06 mm2, 2e-4 of the largest
-area), the chamber's tip's own path between samples (a film's closing, which jitters
-by microns as the grown polygons' vertices pass each other: strips of 0.02-0.03 mm2),
-and a corner near (33.5, -6.9) mm (0.04 mm2).  The pin-cycloid's discharge at 96 and
-192 was 5.5e-5 and 2.7e-5 against the reference swept as before, which the new one is
-7e-5 off.  On one machine its sweep at 384 samples is 4e-5 off 768's, at a sliver born
-92 deg after the chamber, where the 768-sample sweep holds less than the union of
-real sections every 0.00025 deg (0.655 against 0.663 mm2 in a 1 x 1.3 mm box, the
-unions still growing at first order towards ~0.67) and 384 samples hold 0.674: there
-the reference is the one short.
-
-Those references share the sections' polygons.  Against polygons 16 times finer in
-chord error and growth (bench err_area_*_polygons), at 24 / 48 points per period,
-after slivers were swept from where the true surfaces touch and pieces' ends carried
-to the sections' contacts (:mod:`.footprint_gaps`, :mod:`.footprint`):
-
-    pin-cycloid  suction    1.14e-4  5.5e-5   (9.3e-5 8.1e-5 before)
-                 discharge  1.1e-4   7.1e-5   (3.44e-3 3.54e-3)
-    circular     suction    2.4e-5   2.4e-5   (8.3e-4 8.0e-4)
-                 discharge  1.06e-3  4.5e-4   (5.88e-3 5.63e-3)
-
-and against each machine's own sealed regions swept 768 times per period (the figures
-above are the earlier code's against the 768-point machine): discharge 1.1e-4 / 4.5e-5
-(pin-cycloid), 2.4e-4 / 9.4e-5 (circular); suction 8.4e-5 / 2.7e-5, 1.0e-4 / 2.6e-5.
-
-Measured 2026-11-30, against the 768-point machine swept 3072 times per period once a
-sliver's cusp-line ends were no longer carried back to its own contact
-(:func:`.surfaces.chains`; the reference had left 0.05 mm2 of the circular's sliver born
-116 deg after the chamber unswept), at 24 / 48 / 96 / 192: circular discharge 4.9e-4 /
-1.8e-4 / 6.2e-5 / 1.7e-4 (2.3e-4 / 1.1e-4 / 2.2e-4 / 1.6e-4 against the old reference,
-the table's own areas the same at 24 / 48 / 96), suction 1.0e-4 / 2.7e-5 / 3.6e-5 /
-1.5e-5; pin-cycloid discharge 1.2e-4 / 4.3e-5 / 9.0e-5 / 1.9e-5, suction 8.3e-5 /
-3.2e-5 / 5.0e-6 / 4.7e-6 (unchanged).  The circular's 24 and 48 are that sliver swept
-short by the table: its pieces' cusp-line ends take their neighbours' moves.
+How far these areas are from the exact ones, at each angle resolution, is measured by
+bench/bench_twin_screw.py against sections with polygons 16 times finer swept 3072
+times per period; its figures, and what each change did to them, are in
+docs/twin_screw.md.
 """
 
 from __future__ import annotations

@@ -57,6 +57,7 @@ class Surfaces:
 
         axes = [np.asarray(r.axis, dtype=float) for r in pair.rotors]
         self.size = max(math.dist(axes[0], axes[-1]), 1e-2 * pair.diameter)
+        self.film_deficit = pair.film_deficit
         self.rotors = []
         self.profiles = [r.profile for r in pair.rotors]
         for r, axis in zip(pair.rotors, axes, strict=True):

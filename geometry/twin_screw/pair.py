@@ -207,6 +207,15 @@ class TwinScrewPair(ContactSearch, RotorPair):
         """Sections cut at residues of one period (:func:`.section.chamber_polygons`)."""
         return {}
 
+    @property
+    def film_deficit(self) -> float:
+        """The sections' rotors are grown by GROW on each wall (:mod:`.regions`); the
+        chords' sagittas, inside the curve on one wall and outside on its mate, about
+        cancel across a film."""
+        from . import regions
+
+        return 2.0 * regions.GROW
+
     def chamber_polygons(self, phi: float, contacts: list | None = None):
         from .section import chamber_polygons
 

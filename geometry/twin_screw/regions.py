@@ -308,7 +308,7 @@ class SectionCutter(GrooveAges, Boundaries):
         for rotor, grooves in zip((MALE, FEMALE), covered, strict=True):
             for k in grooves:
                 out.append(self._whole_groove(rotor, None, psi,
-                                              self.window.turned(rotor, k, psi)))
+                                              self.window.turned(rotor, k, psi), known=k))
                 out[-1].piece = -len(out)  # (pieces of their own)
         return out
 
@@ -332,10 +332,10 @@ class SectionCutter(GrooveAges, Boundaries):
             return size > WHOLE_FRACTION * self.C ** 2
         return abs(size - ref.area) < WHOLE_FRACTION * ref.area
 
-    def _whole_groove(self, rotor, piece, psi, rings) -> Part:
-        """A whole groove (``rings``: its polygons, metres): its area and wetted length
-        are every whole groove's (cut once), its loads those of the arc between its two
-        tips (equal radii: no torque)."""
+    def _whole_groove(self, rotor, piece, psi, rings, known=None) -> Part:
+        """A whole groove (``rings``: its polygons, metres; ``known``: its index, if
+        known): its area and wetted length are every whole groove's (cut once), its
+        loads those of the arc between its two tips (equal radii: no torque)."""
         if rotor not in self._whole:
             self._whole[rotor] = self._part(rotor, piece, psi, "")
         ref = self._whole[rotor]
@@ -359,14 +359,16 @@ class SectionCutter(GrooveAges, Boundaries):
             return Part(rotor, groove, age, ref.area, force, np.zeros(2), ref.perimeter.copy(),
                         corners=[(rotor, (2 * groove + 2) % (2 * n), a),
                                  (rotor, 2 * groove + 1, b)], side="", polygons=rings)
-        # (squared distances: the order is the distances')
-        diff = rings[0][None, :, :] - tips[:, None, :]
-        near = np.min(np.einsum("tvk,tvk->tv", diff, diff), 1)
-        pair = sorted(np.argsort(near)[:2])  # one tip only on a one-lobe rotor
-        k = pair[1] if n > 2 and (pair[0], pair[1]) == (0, n - 1) else pair[0]
-        # Two lobes: both grooves lie between the same two tips; the centroid of a
-        # groove spanning half a turn lies within it.
-        groove, age = self._groove_age(rotor, rings, psi, "", groove=int(k) if n > 2 else None)
+        if known is None:
+            # (squared distances: the order is the distances')
+            diff = rings[0][None, :, :] - tips[:, None, :]
+            near = np.min(np.einsum("tvk,tvk->tv", diff, diff), 1)
+            pair = sorted(np.argsort(near)[:2])  # one tip only on a one-lobe rotor
+            k = pair[1] if n > 2 and (pair[0], pair[1]) == (0, n - 1) else pair[0]
+            # Two lobes: both grooves lie between the same two tips; the centroid of a
+            # groove spanning half a turn lies within it.
+            known = int(k) if n > 2 else None
+        groove, age = self._groove_age(rotor, rings, psi, "", groove=known)
         self.window.keep(rotor, groove, rings, psi)
         # The fluid runs clockwise along the rotor, from the groove's counter-clockwise
         # tip (k + 1) to its clockwise one (k).

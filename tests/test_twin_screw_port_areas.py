@@ -253,9 +253,9 @@ def test_a_sliver_that_opens_onto_its_chamber_is_swept():
     "2026-11-30).  The chamber's end is a film by the top cusp, too thin at its last "
     "sample to be followed (geometry/footprint.py THIN): it is swept rigidly from the "
     "sample before to where its rigidly moved area is least, which moves with the "
-    "polygons (0.027 against 0.022 rad on; 0.13 mm2 of sweep).  Against "
-    "polygons 16 times finer swept 3072 times per period the table's own errors are "
-    "9.5e-5 and 7.6e-5 (bench/bench_twin_screw.py)"))
+    "polygons (0.027 against 0.022 rad on; 0.13 mm2 of sweep).  Against polygons 16 "
+    "times finer swept 3072 times per period the table's errors are 1.47e-4 and 6.5e-5 "
+    "(bench/bench_twin_screw.py)"))
 def test_port_areas_do_not_depend_on_the_sections_polygons(monkeypatch):
     """The table's port areas with the shipped polygons and with polygons 16 times
     finer in chord error and growth (geometry/twin_screw/regions.py), at the same

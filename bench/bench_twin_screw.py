@@ -19,7 +19,7 @@ and their errors against references computed in the same run,
 
 Target (issue 13): geometry figures and table of a 4/6 pair at 1e-4 relative error in
 under 1 s.  The figures of every run, and what changed between them, are in
-docs/twin_screw.md.  The port reference costs ~25 min a profile.
+docs/twin_screw.md.  The port reference costs ~17 min a profile.
 """
 
 from __future__ import annotations

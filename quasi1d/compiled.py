@@ -95,9 +95,10 @@ def _entries():
 
 
 def _helpers():
-    from . import chamber, coolprop_bubble, coolprop_fluid, dry_air, flows, kernel, stepping
+    from . import chamber, coolprop_bubble, coolprop_fluid, dry_air, flows, kernel, oil, stepping
 
-    return (flows._x_eff, flows.nozzle_critical_ratio, flows._psi, flows.nozzle_constants,
+    return (oil.homogeneous_split, oil.heat_to_gas, flows._x_eff, flows.nozzle_critical_ratio,
+            flows._psi, flows.nozzle_constants,
             flows.nozzle_f_c, flows.fanno_f, dry_air.table_interp, dry_air._lerp,
             coolprop_fluid.table_cell, coolprop_fluid.table_row, coolprop_fluid.table_state,
             coolprop_fluid._or_liquid, coolprop_bubble.liquid_state, kernel.fluid_state,
@@ -109,9 +110,10 @@ def _helpers():
 
 
 def _inlined():
-    from . import coolprop_bubble, coolprop_fluid, dry_air, kernel
+    from . import coolprop_bubble, coolprop_fluid, dry_air, kernel, oil
 
-    return (kernel._add, kernel._node, kernel._slots, kernel._oil_leak, kernel.fluid_state,
+    return (kernel._add, kernel._node, kernel._slots, kernel._oil_leak, oil.homogeneous_split,
+            oil.heat_to_gas, kernel.fluid_state,
             dry_air.table_interp, dry_air._lerp, coolprop_fluid.table_row,
             coolprop_fluid.table_state,
             coolprop_fluid._or_liquid, coolprop_bubble.liquid_state)

@@ -28,6 +28,7 @@ from . import flows, stepping
 from .chamber import spline_at
 from .coolprop_fluid import table_state
 from .dry_air import table_interp as table_1d
+from .oil import heat_to_gas, homogeneous_split
 
 # Fluid kinds of fluid_state (the fluids' kernel_params)
 PERFECT, TABLE_1D, TABLE_2D = 0, 1, 2
@@ -268,10 +269,9 @@ def _oil_leak(dy, b, maps, row, F, W, up):
     """:func:`.oil.homogeneous_split` of a leakage flow (the gas-only flow F, from node
     ``up``): its oil added to dy through the maps' oil rows ``row``; returns the gas's
     part."""
-    Fg = F / np.sqrt(1.0 + max(W[_X, up], 0.0))
-    Fo = Fg * W[_X, up]
+    Fg, Fo, Eo = homogeneous_split(F, W[_X, up], W[_Y, up])
     _add(dy, b, maps[0], row, Fo)
-    _add(dy, b, maps[1], row, Fg * W[_Y, up])
+    _add(dy, b, maps[1], row, Eo)
     _add(dy, b, maps[2], row, abs(Fo))
     return Fg
 
@@ -280,7 +280,7 @@ def _oil_heat(dy, b, y, n, na, W, oil, w):
     """The oil's heat to the gas of every slot (W's _QO row), as the model's."""
     cp, datum, tau = oil[3], oil[4], oil[5]
     for k in range(na):
-        q = (y[b, 3 * n + k] - y[b, 2 * n + k] * cp * (W[_T, k + 1] - datum)) / tau
+        q = heat_to_gas(y[b, 3 * n + k], y[b, 2 * n + k], W[_T, k + 1], cp, datum, tau)
         W[_QO, k + 1] = q
         dy[b, n + k] += q * w
 

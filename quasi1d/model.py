@@ -305,7 +305,8 @@ class ChamberModel:
             dy[:, acc0 + ACC_Q] = q.sum(axis=1) * w
         if self.oil:
             op, mo, Ho = self.op, y[:, 2 * n:2 * n + na], y[:, 3 * n:3 * n + na]
-            q_oil = (Ho - mo * op.oil_cp_J_kgK * (T - self.liquid_datum_K)) / op.oil_time_constant_s
+            q_oil = oil.heat_to_gas(Ho, mo, T, op.oil_cp_J_kgK, self.liquid_datum_K,
+                                    op.oil_time_constant_s)
             q = q_oil if q is None else q + q_oil
         if q is not None:
             dy[:, n:n + na] += q * w

@@ -110,6 +110,13 @@ def homogeneous_split(F, X_up, Y_up):
     return Fg, Fg * X_up, Fg * Y_up
 
 
+def heat_to_gas(Ho, mo, T, cp, datum, tau):
+    """The oil's heat to the gas per second (any shape): the oil's enthalpy Ho above what
+    it would hold at the gas's temperature T (mass mo, c_oil cp, enthalpy zero at
+    ``datum``), relaxed over the exchange time constant tau."""
+    return (Ho - mo * cp * (T - datum)) / tau
+
+
 def leakage(seg, F, X, Y, mix=None):
     """Split the leakage columns of the signed flows F (B, n_flows) in place into gas
     (F keeps the gas) and return the oil's mass and enthalpy flows (B, n_leak).  The

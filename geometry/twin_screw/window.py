@@ -40,9 +40,10 @@ class GrooveWindow:
         self.whole = {}  # rotor -> (groove, rings in the rotor's own frame)
 
     def _rotor(self, r):
-        """(per groove: vertex indices of its stretch, covering points; all grooves'
-        points for the reach test and their groove of each), or None when the rotor
-        is not windowed."""
+        """Per groove: (the indices of its stretch of the grown polygon, from its
+        clockwise tip on; the tip and the arc that replace the stretch; the stretch's
+        and the arc's points, for the reach test), or None when the rotor is not
+        windowed."""
         cut = self.cutter
         rd = cut._rotor_data[r]
         poly, radius = rd.polygon, cut.R[r]

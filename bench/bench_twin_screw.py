@@ -57,11 +57,13 @@ REFERENCE = 768
 #: reference machine's birth node, 0.001 rad off the 96-point machine's); 3072 moves the
 #: reference by 1.3e-4 there (4.5 min a sweep instead of 1).
 REFERENCE_PORT_STEPS = 3072
-#: The lines' reference.  From 384 points per period on, the pin-cycloid's interlobe
-#: lines to the chambers 4 and 6 periods on shrink by 4e-3 and 1.5e-2 (768) against
-#: their values at 24 to 192, which agree to 1e-7: the tracks' presence and offsets
-#: agree at common nodes, the cause is not found yet; 192 stays the reference.
-LINES_REFERENCE = 192
+#: The lines' reference.  768 points per period: the lines at 24 to 384 lie within 6e-7
+#: (pin-cycloid) and 5.1e-5 / 7e-7 / 1.6e-7 / 4.8e-9 / 1.8e-10 (circular, 24 to 384) of
+#: it.  (It was 192 while the pin-cycloid's interlobe lines shrank by 4e-3 from 384 on:
+#: a track's lost nodes before its joint were counted in steps, and a contact search
+#: started too far from its contact, geometry/twin_screw/track_ends.py and
+#: contact_search.py.)
+LINES_REFERENCE = REFERENCE
 #: The port reference's polygons, this many times finer (chord error and growth,
 #: geometry/twin_screw/regions.py): the other references share the table's polygons,
 #: whose areas are corrected to the true curves (slivers), while the ports' are not.
@@ -148,9 +150,10 @@ def run(results_dir: Path) -> list[dict]:
 
 def _profile_rows(label: str, name: str) -> list[dict]:
     case = load_case(REPO / "examples" / name)
-    _, _, ref_values, _ = _case(case, REFERENCE, table=False)
+    _, ref, ref_values, _ = _case(case, REFERENCE, table=False)
     ports = _reference_ports(case)
-    lines_ref = SweptMachine(case.pair, case.sweep(None), LINES_REFERENCE)
+    lines_ref = (ref if LINES_REFERENCE == REFERENCE
+                 else SweptMachine(case.pair, case.sweep(None), LINES_REFERENCE))
     rows = []
     for ppp in RESOLUTIONS:
         (dt, cpu), m, values, table = _case(case, ppp)

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.optimize import minimize_scalar
 
 from rotorflow.geometry.machine import SweptMachine
 from rotorflow.geometry.planar import rotate
@@ -56,6 +57,51 @@ def test_pin_cycloid_lines_converge(kind):
         # 1e-6: two decades above what is measured, three below the first-order error
         # of a stretch end off by half a step.
         assert np.abs(here - there).max() / there.max() < 1e-6, ppp
+
+
+def test_lines_hold_as_the_table_grows_finer():
+    """The same at 384 points per period, where a track's last nodes before the joint at
+    the top cusp are lost in more steps than at 96 (the sliver there is below the
+    polygons' resolution over 0.0082 rad: four nodes, not two) and a node's contact lies
+    between two far-apart points of the profile's foot grid.  The interlobe lines to
+    the chamber 4 periods on fell short by 0.3 mm there (4e-3; 1.3e-4 once the lost
+    nodes were reached by angle); measured now 3.5e-7 against 768."""
+    ref = machine(96)
+    m = machine(384)
+    for kind in ("tip", "interlobe"):
+        here = _total(m.track_lines, kind)
+        there = _total(ref.track_lines_at(m.curves.phi), kind)
+        assert np.abs(here - there).max() / there.max() < 1e-6, kind
+
+
+def test_a_contact_between_far_apart_foot_grid_points_is_found():
+    """The contact search starts at the nearest point of a grid sampled by chord error,
+    whose points lie 0.35 mm apart on the male's gentle flank: a corner 14 um from the
+    contact at 384 points per period (male angle -1.5524 rad) had its nearest grid
+    point 0.17 mm away, 0.022 of a piece off, beyond the search window, and was kept
+    as a contact with no rate.  The point found must be on the male and satisfy the law
+    of gearing (its normal through the pitch point), moving at the male's speed."""
+    pair = _case().pair
+    psi = -1.5523885154299637
+    x = np.array([35.17538976, -17.1293251]) * 1e-3
+    found, rate = pair.contact_near(x, psi)
+    assert np.linalg.norm(found - x) < 3e-5  # it is the nearby contact
+    local = rotate(found[None, :], -psi)[0]
+    u = np.linspace(0.0, pair.male.n, 400_001)[:-1]
+    on_male = np.linalg.norm(pair.male.point(u) - local, axis=-1)
+    k = int(np.argmin(on_male))
+    foot = minimize_scalar(lambda v: float(np.linalg.norm(pair.male.point(np.array([v]))[0]
+                                                          - local)),
+                           bounds=(u[k - 1], u[k + 1]), method="bounded",
+                           options={"xatol": 1e-13})
+    assert foot.fun < 1e-9  # a point of the male profile
+    pitch = rotate(pair.gearing.pitch_point[None, :], -psi)[0]
+    normal = pair.male.normal(np.array([foot.x]))[0]
+    miss = abs(normal[0] * (pitch - local)[1] - normal[1] * (pitch - local)[0])
+    # (the angle between the normal and the way to the pitch point; a contact 0.022 of
+    # a piece off along this flank misses by ~1e-2)
+    assert miss < 1e-7 * np.linalg.norm(pitch - local)
+    assert np.linalg.norm(rate) > 1e-3  # it moves (m/rad)
 
 
 def test_contact_next_to_a_cusp_is_the_meshing_point():

@@ -194,8 +194,18 @@ class ContactSearch:
         """
         local = rotate(np.asarray(x, dtype=float)[None, :], -psi)[0]
         u_grid, p_grid = self._foot_grid
-        u0 = float(u_grid[int(np.argmin(np.linalg.norm(p_grid - local, axis=-1)))])
-        u = self._root(u0 - CONTACT_WINDOW, u0 + CONTACT_WINDOW, u0, psi)
+        i = int(np.argmin(np.linalg.norm(p_grid - local, axis=-1)))
+        u0 = float(u_grid[i])
+        # The grid is sampled by chord error: on a gentle arc its points lie far apart
+        # (0.042 of a piece on the pin-cycloid's flank), and the foot of x may be half
+        # that from the nearest, beyond the window; the window spans the grid's
+        # neighbours (the search missed a contact 14 um from x there at 384 points per
+        # period, which shortened an interlobe line).
+        n = len(u_grid)
+        below = u_grid[i - 1] - (self.male.n if i == 0 else 0.0)
+        above = u_grid[(i + 1) % n] + (self.male.n if i == n - 1 else 0.0)
+        u = self._root(min(u0 - CONTACT_WINDOW, below), max(u0 + CONTACT_WINDOW, above),
+                       u0, psi)
         if u is None:
             # No contact here: keep the polygon's corner, moving with neither rotor.
             return np.asarray(x, dtype=float), np.zeros(2)

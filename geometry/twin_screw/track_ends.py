@@ -54,8 +54,14 @@ BAND_SHADOW = 2.0
 #: A node this near a joint's instant (rad) is at the joint: its rate is either arc's.
 JOINT_NODE = 1e-9
 #: Absent nodes a track may have lost next to an event it begins or ends at (a sliver
-#: below the polygons' resolution near a cusp; two were seen on the pin-cycloid).
+#: below the polygons' resolution near a cusp), and the angle (rad) they may span: the
+#: loss is an angle, not a count of nodes.  The pin-cycloid's interlobe tracks lose
+#: 0.0082 rad before the joint at the top cusp (0.0061 with polygons 4 times finer),
+#: two nodes at 96 points per period, four at 384: counted in nodes alone, the tracks
+#: ended half a step after their last node from 384 on, and their lines to the
+#: chamber 4 periods on fell short by 0.3 mm (4e-3).
 EVENT_REACH = 3
+EVENT_ANGLE = 0.02
 #: Two joints within this (rad, and per C in position) are one: where a piece ends and
 #: the next begins (closed forms agree to ~1e-13).
 SAME_EVENT = 1e-9
@@ -93,8 +99,9 @@ def refine(pair, psi: np.ndarray, track):
         # A track that ends (begins) at the event may have lost its last (first) nodes
         # before it: near a cusp the sliver beyond the contact is below the polygons'
         # resolution.  Its nearest node within EVENT_REACH steps stands for it.
-        lo = _nearest_present(track.present, lo, -1)
-        hi = _nearest_present(track.present, hi, 1)
+        reach = _reach(h)
+        lo = _nearest_present(track.present, lo, -1, reach)
+        hi = _nearest_present(track.present, hi, 1, reach)
         # The sides on which the track has this contact there: it may begin or end at
         # the event (a chamber born at a band), or change its chamber beyond.
         sides = [j for j in (lo, hi) if 0 <= j < n and track.present[j]
@@ -124,11 +131,16 @@ def refine(pair, psi: np.ndarray, track):
                                bridges=tuple(bridges))
 
 
-def _nearest_present(present, j: int, step: int) -> int:
+def _reach(h: float) -> int:
+    """Absent nodes, ``h`` apart, a track may have lost next to its event."""
+    return max(EVENT_REACH, math.ceil(EVENT_ANGLE / h))
+
+
+def _nearest_present(present, j: int, step: int, reach: int) -> int:
     """Node j if the track is there, else its nearest node that is, going ``step`` (+-1)
-    over absent nodes only, at most EVENT_REACH of them; j if none."""
+    over absent nodes only, at most ``reach`` of them; j if none."""
     n = len(present)
-    for k in range(EVENT_REACH + 1):
+    for k in range(reach + 1):
         i = j + step * k
         if not 0 <= i < n:
             return j
@@ -235,8 +247,9 @@ def _breaks(pair, psi):
     -k then meets the female where lobe 0 does at a, at the same fixed point)."""
     period = TWO_PI / pair.gearing.lobes_male
     # A chamber's first and last sealing points can lie a little beyond its table's
-    # ends (the sliver there is below the polygons' resolution): EVENT_REACH steps.
-    reach = EVENT_REACH * (psi[1] - psi[0])
+    # ends (the sliver there is below the polygons' resolution): as far as it may
+    # have lost nodes.
+    reach = _reach(psi[1] - psi[0]) * (psi[1] - psi[0])
     out = []
     for phase, length, point, shadow in pair.contact_breaks:
         k0 = math.ceil((psi[0] - reach - phase) / period)

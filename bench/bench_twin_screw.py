@@ -8,7 +8,7 @@ and their errors against references computed in the same run,
 
 - of the largest chamber volume and of Pi_max, against the machine at REFERENCE points
   per period;
-- of the chamber's tip and interlobe sealing lines, against LINES_REFERENCE (each kind
+- of the chamber's tip and interlobe sealing lines, against the same machine (each kind
   summed over its lines, as functions of the angle: the largest difference from the
   reference's lines at the same angles over the reference's largest, with the order
   each shows against the previous resolution);
@@ -44,7 +44,12 @@ RESOLUTIONS = (24, 48, 96, 192)
 #: tip passes a cusp and are swept at fourth order between those events (geometry/
 #: load_sweep.py): Pi_max at 24 to 192 lies within 2.5e-5 of 768, and 768 within 4e-7 of
 #: 1536 (circular 1e-8).  (As the loads' linear interpolant it converged at first order:
-#: 192 left it 1.2e-4 from its limit.)
+#: 192 left it 1.2e-4 from its limit.)  The lines at 24 to 384 lie within 6e-7
+#: (pin-cycloid) and 5.1e-5 / 7e-7 / 1.6e-7 / 4.8e-9 / 1.8e-10 (circular, 24 to 384) of
+#: it.  (Their reference was 192 while the pin-cycloid's interlobe lines shrank by 4e-3
+#: from 384 on: a track's lost nodes before its joint were counted in steps, and a
+#: contact search started too far from its contact, geometry/twin_screw/track_ends.py
+#: and contact_search.py.)
 REFERENCE = 768
 #: Samples per period of the reference's swept sealed regions (a table's: its section
 #: grid, twice its points per period).  On one 24-point machine, 384 samples are 4e-5
@@ -57,13 +62,6 @@ REFERENCE = 768
 #: reference machine's birth node, 0.001 rad off the 96-point machine's); 3072 moves the
 #: reference by 1.3e-4 there (4.5 min a sweep instead of 1).
 REFERENCE_PORT_STEPS = 3072
-#: The lines' reference.  768 points per period: the lines at 24 to 384 lie within 6e-7
-#: (pin-cycloid) and 5.1e-5 / 7e-7 / 1.6e-7 / 4.8e-9 / 1.8e-10 (circular, 24 to 384) of
-#: it.  (It was 192 while the pin-cycloid's interlobe lines shrank by 4e-3 from 384 on:
-#: a track's lost nodes before its joint were counted in steps, and a contact search
-#: started too far from its contact, geometry/twin_screw/track_ends.py and
-#: contact_search.py.)
-LINES_REFERENCE = REFERENCE
 #: The port reference's polygons, this many times finer (chord error and growth,
 #: geometry/twin_screw/regions.py): the other references share the table's polygons,
 #: whose areas are corrected to the true curves (slivers), while the ports' are not.
@@ -152,13 +150,11 @@ def _profile_rows(label: str, name: str) -> list[dict]:
     case = load_case(REPO / "examples" / name)
     _, ref, ref_values, _ = _case(case, REFERENCE, table=False)
     ports = _reference_ports(case)
-    lines_ref = (ref if LINES_REFERENCE == REFERENCE
-                 else SweptMachine(case.pair, case.sweep(None), LINES_REFERENCE))
     rows = []
     for ppp in RESOLUTIONS:
         (dt, cpu), m, values, table = _case(case, ppp)
         err = [abs(v / r - 1) for v, r in zip(values, ref_values, strict=True)]
-        err += [_line_error(m, lines_ref, kind) for kind in ("tip", "interlobe")]
+        err += [_line_error(m, ref, kind) for kind in ("tip", "interlobe")]
         err += _port_errors(m, table, ports)
         row = {"profile": label, "points_per_period": ppp, "time_s": dt, "cpu_s": cpu,
                "err_V_max": err[0], "err_Pi_max": err[1], "err_tip_lines": err[2],

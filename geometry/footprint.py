@@ -81,18 +81,11 @@ REFINE = ()
 #: :attr:`.family.RotorPair.film_deficit`) are not followed from sample to sample: a
 #: sliver just born, thinner than about twice the twin screw's grown rotors' overlap,
 #: comes out of Clipper as a string of specks, not as the sliver; its passage is swept
-#: from its birth rigidly, a dying film's to its death.  The true thickness, so that
-#: polygons of any fineness follow the same films: the twin screw's grown rotors take
-#: 4e-6 C off every film (1e-5 of its polygons' own, as before).  Following the same
-#: films, polygons 16 times finer swept 3072 times per period leave the table's port
-#: areas 1.4-1.5e-4 (4/6 pin-cycloid, suction) and 3.9-4.6e-4 (circular, discharge)
-#: off at every resolution from 24 to 192 points per period (bench/bench_twin_screw.py).
-#: Finer polygons cannot simply follow thinner films: at 2.5 of their overlaps (6e-7
-#: C) they missed the birth of the pin-cycloid's sliver 2.1 deg after its chamber's
-#: (no event; 1.34 against 1.67 mm2 swept, test_plain_unions_fill_the_sweep_of_a_born_
-#: sliver).  Lowered to 6e-6 for the table's polygons, the sweep followed the specks of
-#: the sliver born on the circular's conformal arcs (its sweep at 2 steps reached
-#: 9.6 % past the one at 64, not 6 %).
+#: from its birth rigidly, a dying film's to its death.  It bounds the true thickness,
+#: so that polygons of any fineness follow the same films (the twin screw's grown
+#: rotors take 4e-6 C off every film: 1e-5 of its polygons' own, as before).  Why finer
+#: polygons do not follow thinner films, and lower values for the table's polygons were
+#: not adopted: docs/twin_screw.md, session 30.
 THIN = 1.4e-5
 #: A rotor piece's end next to the other rotor's piece is carried on to the section's
 #: nearest contact within this (per centre distance; :func:`.surfaces.chains`).  The

@@ -86,6 +86,7 @@ def refine(pair, psi: np.ndarray, track):
     bridges = []
     h = psi[1] - psi[0]
     n = len(psi)
+    reach = _reach(h)
     for psi_b, length, mid, shadow in _breaks(pair, psi):
         before = np.nonzero(psi <= psi_b - shadow)[0]
         after = np.nonzero(psi >= psi_b + shadow)[0]
@@ -100,7 +101,6 @@ def refine(pair, psi: np.ndarray, track):
         # A track that ends (begins) at the event may have lost its last (first) nodes
         # before it: near a cusp the sliver beyond the contact is below the polygons'
         # resolution.  Its nearest node within that loss's reach stands for it.
-        reach = _reach(h)
         lo = _nearest_present(track.present, lo, -1, reach)
         hi = _nearest_present(track.present, hi, 1, reach)
         # The sides on which the track has this contact there: it may begin or end at

@@ -99,7 +99,7 @@ class Events(Gaps):
             # micrometre crossing 0.13 mm2 near the cusp, went unswept by the finer
             # sweeps (docs/twin_screw.md, session 32).
             d = self._closing_gap(ring, cls, np.linspace(0.0, reach, 2 * EVENT_SCAN + 1),
-                                  sign, orient)
+                                  sign, orient, touching=True)
             if d is not None:
                 least = float(ds[int(np.argmin(np.abs(areas)))])
                 return d, "sliver", max(least, 2.0 * d)
@@ -113,17 +113,27 @@ class Events(Gaps):
             return d, "pocket", d
         return None
 
-    def _closing_gap(self, ring, cls, ds, sign, orient):
+    def _closing_gap(self, ring, cls, ds, sign, orient, touching=False):
         """The first move (of ``ds``, towards ``sign``) at which a rotor piece's median
         gap to the rest of the ring closes, interpolated between the moves; None.
-        (Roughly: each vertex's own birth is found where it is swept, :meth:`_births`.)"""
+        (Roughly: each vertex's own birth is found where it is swept, :meth:`_births`.)
+        With ``touching``, a gap that bottoms out inside the scan below CLOSING of its
+        own, without closing, touches at its least: conformal arcs (the circular pair's,
+        ~116 deg after its chamber's birth) part from touching, and with polygons 16
+        times finer their grown overlap no longer makes the gap cross (it bottoms out at
+        0.03 um of 1 um), so their sliver's birth was not found at all."""
+        least = None
         for k in sorted(set(cls[cls >= 0].tolist())):
             gaps = [self._gap(ring, cls, k, sign * d, orient) for d in ds]
             for i in range(1, len(ds)):
                 if gaps[i] <= 0.0 < gaps[i - 1]:
                     w = gaps[i - 1] / (gaps[i - 1] - gaps[i])
                     return float(ds[i - 1] + w * (ds[i] - ds[i - 1]))
-        return None
+            i = int(np.argmin(gaps))
+            if touching and 0 < i < len(ds) - 1 and gaps[i] <= CLOSING * gaps[0] and (
+                    least is None or ds[i] < least):
+                least = float(ds[i])
+        return least
 
     def _moved(self, ring, cls, dpsi):
         q = ring.copy()

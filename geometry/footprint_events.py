@@ -59,8 +59,9 @@ class Events(Gaps):
         """(|dpsi|, kind, reach) of the event of ring ``ring_index`` of sample ``smp``
         within h in the direction ``sign`` (-1: back to a birth, +1: on to a death),
         found by moving its rotor vertices rigidly: "sliver" where a rotor piece's
-        signed gap to the rest of the ring vanishes, "pocket" where the ring's area is
-        least; None.  ``reach``: how far the ring's own vertices' gaps are looked for
+        signed gap to the rest of the ring vanishes (or, the ring's area not falling,
+        bottoms out: :meth:`_closing_gap`), "pocket" where the ring's area is least;
+        None.  ``reach``: how far the ring's own vertices' gaps are looked for
         (:meth:`_births`), to where its area, moved rigidly, is least."""
         ring, cls = smp.rings[ring_index]
         a0 = _area(ring)

@@ -152,3 +152,28 @@ def test_a_sliver_by_the_cusp_line_is_swept_from_where_it_touched_the_male():
     m = circular()
     box = (np.array([0.0393, -0.0126]), np.array([0.04025, -0.0116]))
     assert _worst(m, 112.5, 120.0, box, 0.01, (114.0, 117.0)) < 10e-6
+
+
+def test_the_contact_path_between_samples_is_followed_to_a_micron():
+    """From 120 to 142.5 deg after the chamber's birth its contact runs 1 mm a step up
+    the contact path, which bends 14 um off each step's chord.  The bands' corners
+    follow the mean of the parabolas through the step's two samples and the one either
+    side (a cubic's accuracy), at five points a step: the contacts of the real sections
+    a quarter, a half and three quarters of a step on lie within 0.7 um of the sweep
+    (measured; 1.5 allows the five-point chords' sag, ~0.4).  Joined by the midpoint of
+    one parabola they lay 4.0 um outside it, and the circular's discharge area erred
+    by 2.0e-4 of its largest at 24 points per period (5.2e-5 now)."""
+    m = circular()
+    sweeper = _sweeper(m)
+    lo, hi = 120.0, 142.5
+    phi = m.section.phi_i
+    swept = sweeper.sweep(phi + np.arange(lo - STEP, hi + STEP + 1e-9, STEP) * DEG)
+    box = (np.array([0.0315, -0.0118]), np.array([0.0385, -0.0010]))
+    contacts = []
+    steps = np.arange(round((hi - lo) / STEP))[:, None] + [0.25, 0.5, 0.75]
+    for a in (lo + STEP * steps).ravel():
+        for c in sweeper.sample(float(phi + a * DEG)).chains:
+            contacts += [c.points[k] for k, e in ((0, 0), (-1, 1)) if c.contact_ends[e]
+                         and np.all((c.points[k] > box[0]) & (c.points[k] < box[1]))]
+    assert len(contacts) >= 30
+    assert _outside(swept, np.array(contacts)).max() < 1.5e-6

@@ -70,8 +70,9 @@ from .surfaces import chains as surface_chains
 #: micrometre thin (its gap grows like the square of the angle, THIN) and its section
 #: comes apart into specks; 0.3 deg after its birth the 4/6 pair's is 2 um wide.
 EVENT_LEAD = 0.15
-#: A corner path's midpoint farther off its chord than this fraction of the chord is
-#: no smooth path (the piece's end went from one corner to another): the chord is kept.
+#: A corner's path farther off its chord (at any of PATH_T) than this fraction of the
+#: chord is no smooth path (the piece's end went from one corner to another): the
+#: chord is kept.
 BEND = 0.1
 #: Where between two samples each corner's path is evaluated (fractions of the step).
 PATH_T = np.linspace(0.0, 1.0, 7)[1:-1]

@@ -67,6 +67,8 @@ REFERENCE_PORT_STEPS = 3072
 #: whose areas are corrected to the true curves (slivers), while the ports' are not.
 POLYGON_REFINE = 16.0
 TARGET_TIME_S = 1.0
+#: Timed runs per resolution (the least CPU counts: the machine is shared).
+TIMED_RUNS = 2
 TARGET_ERROR = 1e-4
 
 
@@ -148,11 +150,17 @@ def run(results_dir: Path) -> list[dict]:
 
 def _profile_rows(label: str, name: str) -> list[dict]:
     case = load_case(REPO / "examples" / name)
+    # The timed runs first, each the least of TIMED_RUNS: after the port reference the
+    # same run took 3.06 s of CPU instead of 1.6 (pin-cycloid at 24, 2026-11-30; what
+    # that reference leaves in the process, not this run's work).
+    _case(case, RESOLUTIONS[0], table=False)  # imports and first calls, untimed
+    runs = {ppp: min((_case(case, ppp) for _ in range(TIMED_RUNS)), key=lambda r: r[0][1])
+            for ppp in RESOLUTIONS}
     _, ref, ref_values, _ = _case(case, REFERENCE, table=False)
     ports = _reference_ports(case)
     rows = []
     for ppp in RESOLUTIONS:
-        (dt, cpu), m, values, table = _case(case, ppp)
+        (dt, cpu), m, values, table = runs[ppp]
         err = [abs(v / r - 1) for v, r in zip(values, ref_values, strict=True)]
         err += [_line_error(m, ref, kind) for kind in ("tip", "interlobe")]
         err += _port_errors(m, table, ports)

@@ -290,9 +290,9 @@ def _bands(bands):
     step before and the step after; at the step's middle that is the cubic through
     all four), one of them where the piece is seen at three samples only, the chord at
     two.  (The midpoint of one parabola, which stood here, cut off a quarter of the
-    path's bulge past its chord: the circular pair's contact path bends 14 um off its
-    1 mm steps at 24 points per period, and its discharge area erred by 2.0e-4 of its
-    largest, 5.2e-5 now.)"""
+    path's bulge past its chord: the circular pair's contact path bends up to 25 um off
+    its 1 mm steps at 24 points per period, and its discharge area erred by 2.0e-4 of
+    its largest, 5.2e-5 now.)"""
     before = {id(y): (x, t0) for x, y, t0, *_ in bands}
     after = {id(x): (y, t1) for x, y, _, t1, *_ in bands}
     out = []

@@ -156,7 +156,7 @@ def test_a_sliver_by_the_cusp_line_is_swept_from_where_it_touched_the_male():
 
 def test_the_contact_path_between_samples_is_followed_to_a_micron():
     """From 120 to 142.5 deg after the chamber's birth its contact runs 1 mm a step up
-    the contact path, which bends 14 um off each step's chord.  The bands' corners
+    the contact path, which bends 3 to 25 um off each step's chord.  The bands' corners
     follow the mean of the parabolas through the step's two samples and the one either
     side (a cubic's accuracy), at five points a step: the contacts of the real sections
     a quarter, a half and three quarters of a step on lie within 0.7 um of the sweep

@@ -153,7 +153,6 @@ def _profile_rows(label: str, name: str) -> list[dict]:
     # The timed runs first, each the least of TIMED_RUNS: after the port reference the
     # same run took 3.06 s of CPU instead of 1.6 (pin-cycloid at 24, 2026-11-30; what
     # that reference leaves in the process, not this run's work).
-    _case(case, RESOLUTIONS[0], table=False)  # imports and first calls, untimed
     runs = {ppp: min((_case(case, ppp) for _ in range(TIMED_RUNS)), key=lambda r: r[0][1])
             for ppp in RESOLUTIONS}
     _, ref, ref_values, _ = _case(case, REFERENCE, table=False)

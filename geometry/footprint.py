@@ -71,10 +71,12 @@ from .surfaces import chains as surface_chains
 #: comes apart into specks; 0.3 deg after its birth the 4/6 pair's is 2 um wide.
 EVENT_LEAD = 0.15
 #: A corner's path farther off its chord (at any of PATH_T) than this fraction of the
-#: chord is no smooth path (the piece's end went from one corner to another): the
-#: chord is kept.
+#: chord is no smooth path (the piece's end went from one corner to another): that
+#: fit is not used.
 BEND = 0.1
-#: Where between two samples each corner's path is evaluated (fractions of the step).
+#: Where between two samples each corner's path is evaluated (fractions of the step):
+#: five points leave 1/36 of the path's bulge past its chord to the polyline's own
+#: sag (the midpoint alone left a quarter).
 PATH_T = np.linspace(0.0, 1.0, 7)[1:-1]
 #: The events at which one more section is cut ("sliver", "pocket"; none by default:
 #: with each vertex swept from its own birth, the 4/6 pin-cycloid's young sweep at 96
@@ -287,12 +289,12 @@ def _bands(bands):
     """The band each piece of surface passes over between two samples: the piece at
     each, joined at its ends by its corners' paths, each evaluated at PATH_T: the mean
     of the parabolas through the corner's positions at three consecutive samples (the
-    step before and the step after; at the step's middle that is the cubic through
-    all four), one of them where the piece is seen at three samples only, the chord at
-    two.  (The midpoint of one parabola, which stood here, cut off a quarter of the
-    path's bulge past its chord: the circular pair's contact path bends up to 25 um off
-    its 1 mm steps at 24 points per period, and its discharge area erred by 2.0e-4 of
-    its largest, 5.2e-5 now.)"""
+    step before and the step after; with equal steps, at the step's middle, that is
+    the cubic through all four), one of them where the piece is seen at three samples
+    only or the other bends past BEND, the chord at two.  (The midpoint of one
+    parabola, which stood here, cut off a quarter of the path's bulge past its chord:
+    the circular pair's contact path bends up to 25 um off its 1 mm steps at 24 points
+    per period, and its discharge area erred by 2.0e-4 of its largest, 5.2e-5 now.)"""
     before = {id(y): (x, t0) for x, y, t0, *_ in bands}
     after = {id(x): (y, t1) for x, y, _, t1, *_ in bands}
     out = []
@@ -310,12 +312,11 @@ def _bands(bands):
             if id(y) in after:
                 z, tz = after[id(y)]
                 fits.append(_parabola((t0, p0), (t1, p1), (tz, z.points[end]), t))
-            mid = np.mean(fits, axis=0) if fits else chord
-            # A corner that bends this sharply between samples is not one path (the
-            # piece's end passed from one corner to another): keep the chord.
-            if np.max(np.linalg.norm(mid - chord, axis=1)) > BEND * np.linalg.norm(p1 - p0):
-                mid = chord
-            ends.append(mid)
+            # A fit that bends this sharply between samples is not one path (the piece's
+            # end passed from one corner to another at that neighbour): it is dropped.
+            reach = BEND * np.linalg.norm(p1 - p0)
+            fits = [f for f in fits if np.max(np.linalg.norm(f - chord, axis=1)) <= reach]
+            ends.append(np.mean(fits, axis=0) if fits else chord)
         ring = np.concatenate([x.points, ends[0], y.points[::-1], ends[1][::-1]])
         out.append(ring_section(ring))
     return [b for b in out if b is not None]

@@ -40,14 +40,13 @@ CROP_WINDOW = 8
 #: above this fraction of the largest open area gets its own section.  The Hermite
 #: interpolant with three-point slopes errs by about a twentieth of the third
 #: difference where the area is smooth (its slopes err by h^2 f'''/6, weighted by at
-#: most 4/27 h): 1e-3 keeps that below 5e-5.  Measured on the 4/6 pin-cycloid at 24
-#: points per period: the nodes below it erred by at most 2.1e-5, the ones above by up
-#: to 5.8e-4.  Across a kink (a slope jump: the discharge area's peak) it errs by up
-#: to 0.37 of the third difference (a jump anywhere in a cell, tested): at 96 points
-#: per period the pin-cycloid's peak node, its third difference under 1e-3, erred by
-#: 1.05e-4 (measured 2026-11-30; 5.8e-5 with its own section).  2.5e-4 keeps a kink's
-#: error below 1e-4 (at 24 points per period the own sections go from 17 to 20 of 35
-#: on the pin-cycloid, from 16 to 24 of 29 on the circular).
+#: most 4/27 h), but by up to 0.37 of it across a kink (a slope jump anywhere in a
+#: cell, tested: the discharge area's peak).  2.5e-4 keeps both below 1e-4.  With 1e-3
+#: (until 2026-11-30; measured on the 4/6 pin-cycloid at 24 points per period, the
+#: nodes below it erred by at most 2.1e-5, the ones above by up to 5.8e-4) the
+#: pin-cycloid's peak node at 96 erred by 1.05e-4 (5.8e-5 with its own section).  At
+#: 24 points per period the own sections went from 17 to 20 of 35 on the pin-cycloid,
+#: from 16 to 24 of 29 on the circular.
 KINK_TOL = 2.5e-4
 
 

@@ -38,6 +38,39 @@ def built(name: str):
     return case, machine, case_port_timing(case, machine)
 
 
+def _fresh(name: str):
+    """(case, machine) of example ``name`` at PPP built afresh: no caches, so that the
+    polygons' settings in force are the ones it is cut with."""
+    import dataclasses
+
+    case = load_case(CASES / name)
+    case = dataclasses.replace(case, pair=dataclasses.replace(case.pair))
+    return case, SweptMachine(case.pair, case.sweep(None), PPP)
+
+
+def _finer_polygons(monkeypatch):
+    """Sections cut with polygons 16 times finer in chord error and growth."""
+    from rotorflow.geometry.twin_screw import regions
+
+    monkeypatch.setattr(regions, "SAMPLE_TOL", regions.SAMPLE_TOL / 16.0)
+    monkeypatch.setattr(regions, "GROW", regions.GROW / 16.0)
+
+
+def _box(lo, hi):
+    from manifold3d import CrossSection
+
+    return CrossSection([np.array([lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]])])
+
+
+def _sections_union(m, ages, box):
+    """The union of machine m's real chamber sections at ``ages``, within ``box``."""
+    from manifold3d import CrossSection, FillRule
+
+    return FP._union([CrossSection([np.ascontiguousarray(q)], FillRule.Positive)
+                      for a in ages for q in m.pair.chamber_polygons(float(m.section.phi_i + a))
+                      if len(q) >= 3]) ^ box
+
+
 def _coverage(machine, points):
     """(angles, covered[angle, point]) of the chamber's section on the section grid over
     its life: whether each point lies in it."""
@@ -276,21 +309,12 @@ def test_port_areas_do_not_depend_on_the_sections_polygons(monkeypatch):
     for a pocket handed over: swept to where its rigidly moved area is least, which
     moved with the polygons, 0.027 against 0.022 rad on;
     test_a_pocket_closing_between_contacts_is_swept_to_its_close.)"""
-    import dataclasses
 
     from rotorflow.geometry.summary import chamber_table
-    from rotorflow.geometry.twin_screw import regions
 
-    case = load_case(CASES / EXAMPLES[0])
-
-    def table():
-        fresh = dataclasses.replace(case, pair=dataclasses.replace(case.pair))
-        return chamber_table(fresh, SweptMachine(fresh.pair, fresh.sweep(None), PPP))
-
-    coarse = table()
-    monkeypatch.setattr(regions, "SAMPLE_TOL", regions.SAMPLE_TOL / 16.0)
-    monkeypatch.setattr(regions, "GROW", regions.GROW / 16.0)
-    fine = table()
+    coarse = chamber_table(*_fresh(EXAMPLES[0]))
+    _finer_polygons(monkeypatch)
+    fine = chamber_table(*_fresh(EXAMPLES[0]))
     for mine, there in ((coarse.area_lp_m2, fine.area_lp_m2),
                         (coarse.area_hp_m2, fine.area_hp_m2)):
         assert np.abs(mine - there).max() <= 1e-4 * there.max()
@@ -310,35 +334,22 @@ def test_a_pocket_closing_between_contacts_is_swept_to_its_close(monkeypatch):
     the sliver it is (each vertex to where its own surfaces touch), the two sweeps hold
     3.25e-7 and 3.37e-7 (measured), the table's inside the fine one, and the union
     (1.68e-7: a union of a moving film fills its sweep slowly) lies inside both."""
-    import dataclasses
-
-    from manifold3d import CrossSection, FillRule
-
-    from rotorflow.geometry.twin_screw import regions
-
-    box = CrossSection([np.array([[0.0412, 0.0272], [0.0421, 0.0272],
-                                  [0.0421, 0.0278], [0.0412, 0.0278]])])
+    box = _box([0.0412, 0.0272], [0.0421, 0.0278])
 
     def swept(div):
-        case = load_case(CASES / EXAMPLES[0])
-        fresh = dataclasses.replace(case, pair=dataclasses.replace(case.pair))
-        m = SweptMachine(fresh.pair, fresh.sweep(None), PPP)
+        m = _fresh(EXAMPLES[0])[1]
         pair, sec = m.pair, m.section
         h = float(sec.psi[1] - sec.psi[0])
         life = sec.phi_f - sec.phi_i
         ages = 305 * h + h / div * np.arange(int((life - 305 * h) * div / h) + 1)
         ages = np.append(ages[ages < life], life)  # the table's nodes from 9.98 rad on
         sweeper = FP.Sweeper(FP.Surfaces(pair), pair.chamber_polygons, *FP.crop_region(pair))
-        return pair, sec, sweeper.sweep(sec.phi_i + ages) ^ box
+        return m, sweeper.sweep(sec.phi_i + ages) ^ box
 
-    pair, sec, table = swept(1)
-    ages = np.arange(10.02, 10.06, 1e-4)
-    union = FP._union([CrossSection([np.ascontiguousarray(q)], FillRule.Positive)
-                       for a in ages for q in pair.chamber_polygons(float(sec.phi_i + a))
-                       if len(q) >= 3]) ^ box
-    monkeypatch.setattr(regions, "SAMPLE_TOL", regions.SAMPLE_TOL / 16.0)
-    monkeypatch.setattr(regions, "GROW", regions.GROW / 16.0)
-    fine = swept(8)[2]
+    m, table = swept(1)
+    union = _sections_union(m, np.arange(10.02, 10.06, 1e-4), box)
+    _finer_polygons(monkeypatch)
+    fine = swept(8)[1]
     # Real sections lie in the true sweep: the union inside both, up to the chords.
     assert (union - table).area() < 1e-3 * union.area()
     assert (union - fine).area() < 1e-3 * union.area()
@@ -358,27 +369,14 @@ def test_conformal_arcs_parting_are_swept_from_their_touching(monkeypatch):
     outside both rotors in that while.  Taken as touching at the gap's least, the film
     is swept per vertex from there: 1.40e-7 (measured), and a union of the real
     sections every 1e-4 rad lies inside the sweep."""
-    import dataclasses
-
-    from manifold3d import CrossSection, FillRule
-
-    from rotorflow.geometry.twin_screw import regions
-
-    box = CrossSection([np.array([[0.0386, -0.0125], [0.0404, -0.0125],
-                                  [0.0404, -0.0116], [0.0386, -0.0116]])])
-    monkeypatch.setattr(regions, "SAMPLE_TOL", regions.SAMPLE_TOL / 16.0)
-    monkeypatch.setattr(regions, "GROW", regions.GROW / 16.0)
-    case = load_case(CASES / EXAMPLES[1])
-    fresh = dataclasses.replace(case, pair=dataclasses.replace(case.pair))
-    m = SweptMachine(fresh.pair, fresh.sweep(None), PPP)
+    box = _box([0.0386, -0.0125], [0.0404, -0.0116])
+    _finer_polygons(monkeypatch)
+    m = _fresh(EXAMPLES[1])[1]
     pair, sec = m.pair, m.section
     h = float(sec.psi[1] - sec.psi[0]) / 8
     sweeper = FP.Sweeper(FP.Surfaces(pair), pair.chamber_polygons, *FP.crop_region(pair))
     swept = sweeper.sweep(sec.phi_i + np.arange(1.95, 2.10, h)) ^ box
-    ages = np.arange(2.025, 2.04, 1e-4)
-    union = FP._union([CrossSection([np.ascontiguousarray(q)], FillRule.Positive)
-                       for a in ages for q in pair.chamber_polygons(float(sec.phi_i + a))
-                       if len(q) >= 3]) ^ box
+    union = _sections_union(m, np.arange(2.025, 2.04, 1e-4), box)
     # Real sections lie in the true sweep: 4.4e-8 of this union's 9.6e-8 lay outside
     # it while the birth went unfound (measured).
     assert (union - swept).area() < 1e-3 * union.area()

@@ -254,9 +254,12 @@ class ChamberModel:
         oil_flows = (None, None)
         if seg.oil is not None:  # a homogeneous gas-oil mixture leaks (see .oil)
             X, Y = node_loads(self, y, m, na)
-            mix = liquid.leak_mix(self, seg, X, fwd, x, p1, r1, k1) \
-                if self.inv_rho_liquid else None  # the liquid's volume (see .liquid)
-            oil_flows = oil_leakage(seg, F, X, Y, mix)
+            if self.leak.mixture == "centrifuged":
+                oil_flows = liquid.centrifuged_leakage(self, seg, F, X, Y, fwd, x, p1, r1, k1)
+            else:
+                mix = liquid.leak_mix(self, seg, X, fwd, x, p1, r1, k1) \
+                    if self.inv_rho_liquid else None  # the liquid's volume (see .liquid)
+                oil_flows = oil_leakage(seg, F, X, Y, mix)
         if cou is not None:
             # Couette flow: carried from the older (node ib) into the younger chamber (ia)
             F[:, seg.cou] -= cou * R[:, seg.cou_older]
@@ -427,10 +430,14 @@ def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Port
     if leak.mixture not in Leakage.MIXTURES:
         raise CaseError(f"leakage mixture {leak.mixture!r} is not one of "
                         f"{', '.join(Leakage.MIXTURES)}")
+    if leak.mixture == "centrifuged" and not (ratio > 0 and op.liquid_density_kg_m3):
+        raise CaseError('leakage mixture "centrifuged" needs a liquid that fills chamber '
+                        "volume ([operating] liquid_density_kg_m3 and gas_volume_fraction < 1 "
+                        "or oil_mass_ratio > 0)")
     n = geo.slots
     nv = (5 if op.liquid_volatile else 4) if ratio > 0 else 2
     laws = resolve(geo.paths, leak)
-    acc = AccColumns.of(laws, oil_leaks=nv >= 4 and leak.mixture == "homogeneous",
+    acc = AccColumns.of(laws, oil_leaks=nv >= 4 and leak.mixture != "gas",
                         vapour=nv == 5)
     segs = tuple(segments(geo, laws, acc, nv, n, ports, suc, dis))
     return ChamberModel(geo, fluid, op, leak, ports, suc, dis, n, nv, laws, acc, segs,

@@ -251,9 +251,9 @@ class Leakage:
     wall speed ratio V = U sqrt(rho / p) (U half the tip speed, positive when the drag runs
     from the upstream side) goes into the correlation and no separate Couette term is
     added; at equal pressures the flow is the fit's drag flow, about w rho U h.  A fit
-    without a wall term (w = 0) keeps the separate Couette term.  ``mixture`` (oil injected):
-    "homogeneous" (default): the gas leaks with its chamber's oil as one mixture, which
-    seals the gaps (:mod:`rotorflow.quasi1d.oil`); "gas": the leakage carries gas only.
+    without a wall term (w = 0) keeps the separate Couette term.  ``mixture`` (a liquid):
+    "homogeneous" (default, :mod:`rotorflow.quasi1d.oil`), "gas" (gas only), "centrifuged"
+    (:func:`rotorflow.quasi1d.liquid.centrifuged_leakage`).
     "rarefied" (vacuum pumps): continuum, slip, transition and free-molecular flow in one
     law (:mod:`rotorflow.quasi1d.rarefied`: Beskok & Karniadakis's unified model along the
     land ``land_mm``, its free-molecular limit the slot's Clausing transmission
@@ -298,7 +298,7 @@ class Leakage:
 
     KEYS = ("gap_um", "model", "coefficient", "zeta", "wall_motion", "correlation", "land_mm",
             "viscosity_Pa_s", "mixture", "accommodation")
-    MIXTURES = ("homogeneous", "gas")
+    MIXTURES = ("homogeneous", "gas", "centrifuged")
 
     @classmethod
     def from_section(cls, d: dict, where: str = "the case") -> Leakage:

@@ -7,8 +7,10 @@ from __future__ import annotations
 import copy
 import functools
 import math
+import re
 import subprocess
 import sys
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -69,6 +71,60 @@ def test_mixture_factor_limits():
     assert liquid_flux == pytest.approx(math.sqrt(2 * rho_l * p1 * (1 - xs)), rel=1e-4)
 
 
+def _centrifuged(kind, X, x=0.99, p1=5e5, rho_g=6.0, rho_l=998.0, k=1.4, e_l=4.2e4):
+    """One leakage flow from node 1 (upstream, X kg of liquid per kg of gas, its
+    specific energy e_l) to node 0 through a path of ``kind``: the gas-only flux F0 of
+    the gap per m2, and what centrifuged_leakage makes of it (gas, liquid, its energy)."""
+    law = SimpleNamespace(path=SimpleNamespace(name="gap", kind=kind))
+    model = SimpleNamespace(fast={}, laws=(law,), inv_rho_liquid=1.0 / rho_l)
+    seg = SimpleNamespace(index=0, names=("gap",), n_leak=1, ia=np.array([1]),
+                          ib=np.array([0]))
+    F0 = math.sqrt(p1 * rho_g) * flows.nozzle_f(np.array([x]), k)[0]
+    F = np.array([[F0]])
+    Fo, Eo = liquid.centrifuged_leakage(
+        model, seg, F, np.array([[0.0, X]]), np.array([[0.0, X * e_l]]),
+        np.array([[True]]), np.array([[x]]), np.array([[p1]]), np.array([[rho_g]]), k)
+    return F0, F[0, 0], Fo[0, 0], Eo[0, 0]
+
+
+def test_centrifuged_leakage_fills_the_casing_gaps_with_liquid():
+    """A tip gap of a chamber with liquid passes no gas and the liquid's orifice flux
+    sqrt(2 rho_l dp) per m2 of gap (1e-4: the gas nozzle and the omega method's gas
+    differ by 2e-5 at x = 0.99, as in test_mixture_factor_limits); the liquid's energy
+    is its own plus its flow work p1 / rho_l.  A dry chamber's tip gap passes its gas."""
+    p1, rho_l, xs, e_l = 5e5, 998.0, 0.99, 4.2e4
+    X = 0.3 * rho_l / (0.7 * 6.0)  # 30 % liquid by volume
+    _, gas, liq, energy = _centrifuged("tip", X)
+    assert gas == 0.0
+    assert liq == pytest.approx(math.sqrt(2 * rho_l * p1 * (1 - xs)), rel=1e-4)
+    assert energy == pytest.approx(liq * (e_l + p1 / rho_l), rel=1e-12)
+    F0, gas, liq, _ = _centrifuged("blow-hole", 0.0)
+    assert gas == F0 and liq == 0.0
+
+
+@pytest.mark.parametrize("alpha", [0.25, 0.9])
+def test_centrifuged_leakage_shares_the_other_gaps_by_volume(alpha):
+    """Interlobe and end-face gaps span the groove's depth: the gas passes alpha of the
+    gap by its own law, the liquid the rest as through an orifice."""
+    p1, rho_g, rho_l, xs = 5e5, 6.0, 998.0, 0.99
+    X = (1 - alpha) * rho_l / (alpha * rho_g)
+    for kind in ("interlobe", "end-face"):
+        F0, gas, liq, _ = _centrifuged(kind, X)
+        assert gas == pytest.approx(alpha * F0, rel=1e-12)
+        assert liq == pytest.approx((1 - alpha) * math.sqrt(2 * rho_l * p1 * (1 - xs)),
+                                    rel=1e-4)
+
+
+def test_centrifuged_leakage_needs_a_liquid_with_a_volume():
+    """Without a liquid that takes chamber volume there is no layer: refused by name."""
+    raw, table = pump()
+    raw = copy.deepcopy(raw)
+    raw["leakage"]["mixture"] = "centrifuged"
+    raw["operating"]["gas_volume_fraction"] = 1.0
+    with pytest.raises(CaseError, match="centrifuged"):
+        pm.point(raw, table, str(pm.EXAMPLE))
+
+
 # --- the pump with its liquid ------------------------------------------------------------
 
 @functools.cache
@@ -127,8 +183,8 @@ def test_bad_liquid_keys_are_named(keys, word):
 
 def test_bad_liquid_fraction_exits_2_with_one_line(tmp_path):
     case = tmp_path / "case.toml"
-    case.write_text(pm.EXAMPLE.read_text().replace(
-        "gas_volume_fraction = 0.703", "gas_volume_fraction = 1.5"))
+    case.write_text(re.sub(r"(?m)^gas_volume_fraction = [0-9.]+", "gas_volume_fraction = 1.5",
+                           pm.EXAMPLE.read_text()))
     out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", "simulate",
                           str(case), "--json"], capture_output=True, text=True)
     assert out.returncode == 2 and out.stdout == ""

@@ -216,7 +216,6 @@ def port_volumes(model, y, dy, V, Vt, m, na):
     return gas_volume(V, mo, inv), Vt_g, mo * inv / m
 
 
-
 #: Path kinds whose gap lies on the bores (see :func:`centrifuged_leakage`).
 CASING_KINDS = ("tip", "blow-hole")
 #: The liquid volume share above which the layer on the bore fills a casing gap.  Below
@@ -244,7 +243,7 @@ def centrifuged_leakage(model, seg, F, X, Y, fwd, x, p1, r1, k1):
     and enthalpy flows (B, n_leak), as :func:`.oil.leakage` does.
 
     The grooves turn the liquid with the rotors at omega^2 r, ~280 g on seed 003's pump
-    (155 mm at 1801 rpm), and the liquid is ~800 times denser than the gas: it lies as a
+    (155 mm at 1801 rpm), and the liquid is 60-800 times denser than the gas: it lies as a
     layer on the bore side of each groove, the gas in the groove's inner part (the
     stratified picture behind twin-screw multiphase pump models, e.g. Vetter & Wincek,
     ASME FED 154, 1993).  Hence:

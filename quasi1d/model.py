@@ -252,7 +252,7 @@ class ChamberModel:
                 f[:, c] = grp.rarefied.reduced_flux(f[:, c], x[:, c], p1[:, c], r1[:, c])
         F = kernel.mass_flows(fwd, p1, r1, f, area)
         oil_flows = (None, None)
-        if seg.oil is not None:  # a homogeneous gas-oil mixture leaks (see .oil)
+        if seg.oil is not None:  # the oil or liquid leaks with the gas (.oil, .liquid)
             X, Y = node_loads(self, y, m, na)
             if self.leak.mixture == "centrifuged":
                 oil_flows = liquid.centrifuged_leakage(self, seg, F, X, Y, fwd, x, p1, r1, k1)

@@ -17,7 +17,8 @@ so the two together take -p dV, the shaft's work on the whole chamber (the liqui
 push-out work (p_d - p_s) V_l is in the indicated power), and a liquid flowing from
 p_up into a chamber at p dissipates (p_up - p) / rho_l per kg into the liquid.
 
-Leakage: the gap passes the homogeneous mixture (no slip, :mod:`.oil`), its flux by
+Leakage (``[leakage] mixture``): "homogeneous", the gap passes the mixture (no slip,
+:mod:`.oil`), its flux by
 Leung's omega method (J. C. Leung, "A generalized correlation for one-component
 homogeneous equilibrium flashing choked flow", AIChE J. 32 (1986) 1743; the frozen,
 non-flashing form, as API 520 Part I Annex C gives it): the mixture's specific volume
@@ -33,8 +34,9 @@ law (nozzle, Fanno, rarefied, calibrated) for the gas alone, f(x); the mixture's
 law times G*(x, omega) / G*(x, 1 / kappa): the law's departure from an ideal gas nozzle
 (friction, rarefaction) is carried over to the mixture.  The gas is kappa's gas in the
 gap (as in :mod:`.oil`: the liquid's heat capacity would pull the expansion towards the
-isothermal one, omega = alpha_1); not modelled: slip, a film of liquid held in the gap by
-the rotors' centrifugal field, flashing of a volatile liquid.
+isothermal one, omega = alpha_1); not modelled: slip, flashing of a volatile liquid.
+"centrifuged": the liquid flung onto the bores fills the gaps there, the others are
+shared by volume, each phase by its own law (:func:`centrifuged_leakage`).
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
+from . import flows
 from .keys import _number
 from .network import ACC_H_SUC, ACC_M_SUC
 
@@ -161,6 +164,9 @@ def parse_keys(d: dict, s: str, where: str) -> dict:
             raise CaseError(f"give gas_volume_fraction or oil_mass_ratio in [{s}] of {where}, "
                             "not both (one liquid per case)")
     out["gas_volume_fraction"] = beta
+    if "liquid_viscosity_Pa_s" in d:
+        out["liquid_viscosity_Pa_s"] = _number(d, "liquid_viscosity_Pa_s", s, where,
+                                               positive=True)
     out.update(_volatile_keys(d, s, where, beta))
     if "liquid_cp_J_kgK" in d:
         if "oil_cp_J_kgK" in d:
@@ -221,26 +227,45 @@ CASING_KINDS = ("tip", "blow-hole")
 #: The liquid volume share above which the layer on the bore fills a casing gap.  Below
 #: it the gap's liquid share falls linearly to zero, so that a chamber the casing gaps
 #: drain dries smoothly instead of switching from liquid to gas (with the switch sharp,
-#: the step size underflowed in the first period).  The pumps' chambers hold 10-30 % of
-#: liquid: on seed 003's multiphase pump eta_v moves by < 1e-7 between 5e-4 and 1e-2.
+#: the step size underflowed in the first period).  Seed 003's multiphase pump's chambers
+#: hold 29 % of liquid at suction close, more as the gas is squeezed: its eta_v moves by
+#: < 1e-7 between 5e-4 and 1e-2.
 LAYER_FILL = 0.01
 
 
-def _casing(model, seg) -> np.ndarray:
-    """Which of the segment's leakage flows cross a gap on the bores (cached per segment)."""
-    key = ("casing", seg.index)
+def _gaps(model, seg):
+    """Per leakage flow of the segment (cached): whether its gap lies on the bores,
+    whether it is a sealing line (or an orifice), its gap and its land (m)."""
+    key = ("centrifuged", seg.index)
     if key not in model.fast:
-        kinds = {law.path.name: law.path.kind for law in model.laws}
-        model.fast[key] = np.array([kinds.get(nm) in CASING_KINDS
-                                    for nm in seg.names[:seg.n_leak]], dtype=bool)
+        laws = {law.path.name: law for law in model.laws}
+        own = [laws[nm] for nm in seg.names[:seg.n_leak]]
+        model.fast[key] = (np.array([w.path.kind in CASING_KINDS for w in own], dtype=bool),
+                           np.array([w.path.measure == "length" for w in own], dtype=bool),
+                           np.array([w.gap_m for w in own]), np.array([w.land_m for w in own]))
     return model.fast[key]
 
 
-def centrifuged_leakage(model, seg, F, X, Y, fwd, x, p1, r1, k1):
+def liquid_flux(dp, dp_eff, line, h, L, rho_l, mu_l):
+    """The liquid's mass flux (kg/s per m2 of gap) through a sealing line (``line``) or
+    an orifice at the pressure difference dp: the orifice's sqrt(2 rho_l dp_eff) (dp_eff
+    the nozzle's smoothed difference, :func:`.flows._x_eff`), on a sealing line in series
+    with plane Poiseuille flow along the land, rho_l h^2 dp / (12 mu_l L), the laminar
+    channel with entry and exit losses, m / m_v + (m / m_i)^2 = 1, as the rarefied law's
+    continuum limit joins the gas's (:mod:`.rarefied`)."""
+    gi = np.sqrt(2.0 * rho_l * dp_eff)
+    gv = rho_l * h * h * dp / (12.0 * mu_l * L)
+    r = np.where(gi > 0.0, gv / np.where(gi > 0.0, gi, 1.0), 0.0)
+    series = 2.0 * gv / (1.0 + np.sqrt(1.0 + 4.0 * r * r))
+    return np.where(line, series, gi)
+
+
+def centrifuged_leakage(model, seg, F, X, Y, fwd, x, p1, r1, area):
     """``[leakage] mixture = "centrifuged"``: gas and liquid through separate parts of each
     gap, the liquid where the rotors have flung it.  Splits the leakage columns of the
-    gas-only flows F (B, n_flows) in place into the gas's and returns the liquid's mass
-    and enthalpy flows (B, n_leak), as :func:`.oil.leakage` does.
+    gas-only flows F (B, n_flows) through the flow areas ``area`` in place into the
+    gas's and returns the liquid's mass and enthalpy flows (B, n_leak), as
+    :func:`.oil.leakage` does.
 
     The grooves turn the liquid with the rotors at omega^2 r, ~280 g on seed 003's pump
     (155 mm at 1801 rpm), and the liquid is 60-800 times denser than the gas: it lies as a
@@ -252,24 +277,26 @@ def centrifuged_leakage(model, seg, F, X, Y, fwd, x, p1, r1, k1):
       passes liquid only while the upstream chamber holds more than LAYER_FILL of it;
     - a gap across the groove's depth (interlobe line, end faces) is shared: the gas
       through the part of it the gas's volume share alpha covers, by the path's own
-      gas law, the liquid through the rest as through an orifice, A sqrt(2 rho_l dp).
+      gas law, the liquid through the rest.
 
-    The liquid's flux carries the path's law's departure from the gas's nozzle
-    (friction, rarefaction), as the homogeneous model does; no slip within a phase."""
+    The liquid flows by its own law (:func:`liquid_flux`: orifice, and on a sealing line
+    Poiseuille flow along the land with the liquid's viscosity), not the gas's; no slip
+    within a phase.  Flows the walls drive against the pressure are refused with this
+    mixture (:func:`.model.build`)."""
     nl, inv = seg.n_leak, model.inv_rho_liquid
+    casing, line, h, L = _gaps(model, seg)
     Fl = F[:, :nl]
     up = fwd[:, :nl]
     Xu = np.where(up, X[:, seg.ia[:nl]], X[:, seg.ib[:nl]])
     Yu = np.where(up, Y[:, seg.ia[:nl]], Y[:, seg.ib[:nl]])
-    rg, xl = r1[:, :nl], x[:, :nl]
-    alpha = 1.0 / (1.0 + np.maximum(Xu, 0.0) * rg * inv)
+    pu, xl = p1[:, :nl], x[:, :nl]
+    alpha = 1.0 / (1.0 + np.maximum(Xu, 0.0) * r1[:, :nl] * inv)
     layer = np.minimum((1.0 - alpha) / LAYER_FILL, 1.0)
-    gas_share = np.where(_casing(model, seg), alpha * (1.0 - layer), alpha)
-    g0 = omega_flux(xl, 1.0 / (k1 if not np.ndim(k1) else k1[:, :nl]))
-    per_gas = np.sqrt(1.0 / (rg * inv)) * np.where(
-        g0 > 0.0, omega_flux(xl, np.zeros_like(xl)) / np.where(g0 > 0.0, g0, 1.0), 0.0)
-    Fo = Fl * (1.0 - gas_share) * per_gas
+    gas_share = np.where(casing, alpha * (1.0 - layer), alpha)
+    G = liquid_flux(pu * (1.0 - xl), pu * (1.0 - flows._x_eff(xl)), line, h, L,
+                    1.0 / inv, model.op.liquid_viscosity_Pa_s)
+    Fo = np.where(up, 1.0, -1.0) * area[..., :nl] * (1.0 - gas_share) * G
     F[:, :nl] = Fl * gas_share
     wet = Xu > 0.0
-    per_kg = np.where(wet, Yu / np.where(wet, Xu, 1.0), 0.0) + p1[:, :nl] * inv
+    per_kg = np.where(wet, Yu / np.where(wet, Xu, 1.0), 0.0) + pu * inv
     return Fo, Fo * per_kg

@@ -255,7 +255,7 @@ class ChamberModel:
         if seg.oil is not None:  # the oil or liquid leaks with the gas (.oil, .liquid)
             X, Y = node_loads(self, y, m, na)
             if self.leak.mixture == "centrifuged":
-                oil_flows = liquid.centrifuged_leakage(self, seg, F, X, Y, fwd, x, p1, r1, k1)
+                oil_flows = liquid.centrifuged_leakage(self, seg, F, X, Y, fwd, x, p1, r1, area)
             else:
                 mix = liquid.leak_mix(self, seg, X, fwd, x, p1, r1, k1) \
                     if self.inv_rho_liquid else None  # the liquid's volume (see .liquid)
@@ -440,6 +440,9 @@ def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Port
     acc = AccColumns.of(laws, oil_leaks=nv >= 4 and leak.mixture != "gas",
                         vapour=nv == 5)
     segs = tuple(segments(geo, laws, acc, nv, n, ports, suc, dis))
+    if leak.mixture == "centrifuged" and any(seg.walls for seg in segs):
+        raise CaseError('leakage mixture "centrifuged" takes flows driven by the pressure '
+                        "only: drop wall_motion (the walls' drag would carry liquid against it)")
     return ChamberModel(geo, fluid, op, leak, ports, suc, dis, n, nv, laws, acc, segs,
                         suc.rho * geo.v_max, op.p_suction_Pa * geo.v_max,
                         hasattr(fluid, "gamma"), 1.0 / geo.omega_outer,

@@ -95,15 +95,15 @@ class Operating:
     oil_mass_ratio: float = 0.0  # injected oil mass per trapped gas mass; 0: no oil
     T_oil_K: float | None = None  # None: equal to T_suction_K
     oil_cp_J_kgK: float = 1900.0  # typical mineral compressor oil
-    # Time constant of gas-oil heat exchange, tau = rho_oil c_oil d / (6 h): 1 ms is that
-    # of ~13 um droplets in still gas (h = 2 k / d, Nu = 2), or of 50 um ones with
-    # h ~ 1.4e4 W/(m2 K) (a spray); 50 um droplets in still gas take 14 ms.
+    # Gas-oil heat exchange time tau = rho_oil c_oil d / (6 h): 1 ms for ~13 um droplets in
+    # still gas (Nu = 2) or 50 um in a spray (h ~ 1.4e4 W/(m2 K)); 50 um in still gas: 14 ms.
     oil_time_constant_s: float = 1.0e-3
     suction_quality: float | None = None  # wet suction's vapour mass fraction (CoolProp only)
-    # A liquid that fills chamber volume (multiphase pumps, quasi1d/liquid.py): its density
-    # (None: the oil's volume is neglected) and the inlet's gas volume fraction (1: gas only;
-    # below 1 the liquid, of heat capacity oil_cp_J_kgK, is drawn in with the gas).
+    # A liquid that fills chamber volume (quasi1d/liquid.py): its density (None: the oil's
+    # volume is neglected), the inlet's gas volume fraction (1: gas only; below 1 the liquid,
+    # of heat capacity oil_cp_J_kgK, is drawn in with the gas), viscosity (water at 20 C).
     liquid_density_kg_m3: float | None = None
+    liquid_viscosity_Pa_s: float = 1.0e-3
     gas_volume_fraction: float = 1.0
     liquid_volatile: str | None = None  # a volatile liquid's CoolProp name (.vapour)
     suction_relative_humidity: float = 1.0
@@ -116,7 +116,7 @@ class Operating:
         "heat_capacity", "molar_mass_g_mol", "cp_J_kgK",
         "oil_mass_ratio", "T_oil_K", "oil_cp_J_kgK", "oil_time_constant_ms", "suction_quality",
         "liquid_density_kg_m3", "gas_volume_fraction", "liquid_cp_J_kgK", "liquid_volatile",
-        "suction_relative_humidity", "lewis_number",
+        "suction_relative_humidity", "lewis_number", "liquid_viscosity_Pa_s",
         "driven",  # a geometry key that the case file keeps in [operating]; not used here
         "discharge_port",  # a geometry key too: the chamber table's area_hp holds the ports
     )

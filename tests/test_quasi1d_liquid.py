@@ -14,6 +14,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from rotorflow.errors import CaseError
 from rotorflow.geometry.summary import build_machine, chamber_table
@@ -71,48 +72,93 @@ def test_mixture_factor_limits():
     assert liquid_flux == pytest.approx(math.sqrt(2 * rho_l * p1 * (1 - xs)), rel=1e-4)
 
 
-def _centrifuged(kind, X, x=0.99, p1=5e5, rho_g=6.0, rho_l=998.0, k=1.4, e_l=4.2e4):
-    """One leakage flow from node 1 (upstream, X kg of liquid per kg of gas, its
-    specific energy e_l) to node 0 through a path of ``kind``: the gas-only flux F0 of
-    the gap per m2, and what centrifuged_leakage makes of it (gas, liquid, its energy)."""
-    law = SimpleNamespace(path=SimpleNamespace(name="gap", kind=kind))
-    model = SimpleNamespace(fast={}, laws=(law,), inv_rho_liquid=1.0 / rho_l)
-    seg = SimpleNamespace(index=0, names=("gap",), n_leak=1, ia=np.array([1]),
-                          ib=np.array([0]))
-    F0 = math.sqrt(p1 * rho_g) * flows.nozzle_f(np.array([x]), k)[0]
-    F = np.array([[F0]])
+RHO_L, MU_L, H, P1 = 998.0, 1.0e-3, 100e-6, 5e5
+
+
+def _centrifuged(kind, X, x=0.9, land=2e-3, forward=True, rho_g=6.0, e_l=4.2e4):
+    """One leakage flow through a path of ``kind`` (1 m of sealing line of gap H, or 1 m2
+    of orifice) from the node holding X kg of liquid per kg of gas (specific energy e_l)
+    at P1 and rho_g to the other at x P1: the gas-only flow F0 through the same area,
+    and what centrifuged_leakage makes of it (gas, liquid, the liquid's energy flow)."""
+    measure = "area" if kind == "blow-hole" else "length"
+    law = SimpleNamespace(path=SimpleNamespace(name="gap", kind=kind, measure=measure),
+                          gap_m=H, land_m=land)
+    model = SimpleNamespace(fast={}, laws=(law,), inv_rho_liquid=1.0 / RHO_L,
+                            op=SimpleNamespace(liquid_viscosity_Pa_s=MU_L))
+    ia, ib = (np.array([1]), np.array([0])) if forward else (np.array([0]), np.array([1]))
+    seg = SimpleNamespace(index=0, names=("gap",), n_leak=1, ia=ia, ib=ib)
+    area = np.array([[H if measure == "length" else 1.0]])
+    F0 = math.sqrt(P1 * rho_g) * flows.nozzle_f(np.array([x]), 1.4)[0] * area[0, 0]
+    F = np.array([[F0 if forward else -F0]])
     Fo, Eo = liquid.centrifuged_leakage(
         model, seg, F, np.array([[0.0, X]]), np.array([[0.0, X * e_l]]),
-        np.array([[True]]), np.array([[x]]), np.array([[p1]]), np.array([[rho_g]]), k)
+        np.array([[forward]]), np.array([[x]]), np.array([[P1]]), np.array([[rho_g]]), area)
     return F0, F[0, 0], Fo[0, 0], Eo[0, 0]
 
 
-def test_centrifuged_leakage_fills_the_casing_gaps_with_liquid():
-    """A tip gap of a chamber with liquid passes no gas and the liquid's orifice flux
-    sqrt(2 rho_l dp) per m2 of gap (1e-4: the gas nozzle and the omega method's gas
-    differ by 2e-5 at x = 0.99, as in test_mixture_factor_limits); the liquid's energy
-    is its own plus its flow work p1 / rho_l.  A dry chamber's tip gap passes its gas."""
-    p1, rho_l, xs, e_l = 5e5, 998.0, 0.99, 4.2e4
-    X = 0.3 * rho_l / (0.7 * 6.0)  # 30 % liquid by volume
-    _, gas, liq, energy = _centrifuged("tip", X)
+def _x_of(liquid_share, rho_g=6.0):
+    """Liquid per gas mass X of a node whose liquid takes ``liquid_share`` of its volume."""
+    return liquid_share * RHO_L / ((1 - liquid_share) * rho_g)
+
+
+def _series_root(dp, land):
+    """The laminar channel with entry and exit losses, m / m_v + (m / m_i)^2 = 1, solved
+    numerically per m of line (independently of liquid_flux's closed form)."""
+    m_v = RHO_L * H**3 * dp / (12 * MU_L * land)
+    m_i = H * math.sqrt(2 * RHO_L * dp)
+    return brentq(lambda m: m / m_v + (m / m_i) ** 2 - 1, 0.0, min(m_v, m_i))
+
+
+@pytest.mark.parametrize("x", [0.3, 0.9, 0.99])
+def test_centrifuged_tip_gaps_pass_the_liquid_by_its_own_law(x):
+    """A tip line of a chamber with 30 % liquid passes no gas and the liquid's laminar
+    channel with entry and exit losses (solved by root-finding here); the liquid's
+    energy is its own plus its flow work P1 / rho_l.  An orifice on the bores (the
+    blow-hole) passes the orifice's sqrt(2 rho_l dp) per m2.  Tolerance: the orifice
+    takes the nozzle's smoothed drop at x -> 1 (flows._x_eff), which lowers dp by
+    (DELTA_X / (1 - x))^2 / 2 relative, so the flux by less than (DELTA_X / (1 - x))^2."""
+    dp, e_l = P1 * (1 - x), 4.2e4
+    tol = max((flows.DELTA_X / (1 - x)) ** 2, 1e-12)
+    _, gas, liq, energy = _centrifuged("tip", _x_of(0.3), x=x)
     assert gas == 0.0
-    assert liq == pytest.approx(math.sqrt(2 * rho_l * p1 * (1 - xs)), rel=1e-4)
-    assert energy == pytest.approx(liq * (e_l + p1 / rho_l), rel=1e-12)
-    F0, gas, liq, _ = _centrifuged("blow-hole", 0.0)
-    assert gas == F0 and liq == 0.0
+    assert liq == pytest.approx(_series_root(dp, 2e-3), rel=tol)
+    assert energy == pytest.approx(liq * (e_l + P1 / RHO_L), rel=1e-12)
+    _, gas, liq, _ = _centrifuged("blow-hole", _x_of(0.3), x=x)
+    assert gas == 0.0 and liq == pytest.approx(math.sqrt(2 * RHO_L * dp), rel=tol)
+
+
+def test_the_liquids_law_tends_to_poiseuille_and_to_the_orifice():
+    """A long land: plane Poiseuille flow rho h^3 dp / (12 mu L) per m; a short one: the
+    orifice h sqrt(2 rho dp)."""
+    dp = P1 * 0.1
+    assert _centrifuged("tip", _x_of(0.3), land=1.0)[2] == pytest.approx(
+        RHO_L * H**3 * dp / (12 * MU_L * 1.0), rel=1e-3)
+    assert _centrifuged("tip", _x_of(0.3), land=1e-9)[2] == pytest.approx(
+        H * math.sqrt(2 * RHO_L * dp), rel=1e-3)
 
 
 @pytest.mark.parametrize("alpha", [0.25, 0.9])
-def test_centrifuged_leakage_shares_the_other_gaps_by_volume(alpha):
+@pytest.mark.parametrize("forward", [True, False])
+def test_centrifuged_leakage_shares_the_other_gaps_by_volume(alpha, forward):
     """Interlobe and end-face gaps span the groove's depth: the gas passes alpha of the
-    gap by its own law, the liquid the rest as through an orifice."""
-    p1, rho_g, rho_l, xs = 5e5, 6.0, 998.0, 0.99
-    X = (1 - alpha) * rho_l / (alpha * rho_g)
+    gap by its own law, the liquid the rest by its own; a flow from node b to node a
+    takes b's liquid and runs negative."""
+    sign = 1.0 if forward else -1.0
     for kind in ("interlobe", "end-face"):
-        F0, gas, liq, _ = _centrifuged(kind, X)
-        assert gas == pytest.approx(alpha * F0, rel=1e-12)
-        assert liq == pytest.approx((1 - alpha) * math.sqrt(2 * rho_l * p1 * (1 - xs)),
-                                    rel=1e-4)
+        F0, gas, liq, _ = _centrifuged(kind, _x_of(1 - alpha), forward=forward)
+        assert gas == pytest.approx(sign * alpha * F0, rel=1e-12)
+        assert liq == pytest.approx(sign * (1 - alpha) * _series_root(P1 * 0.1, 2e-3),
+                                    rel=1e-6)  # (x = 0.9: the smoothing's 1e-6, above)
+
+
+def test_a_drained_casing_gap_fades_to_the_gas():
+    """Below LAYER_FILL of liquid the tip gap's liquid share falls linearly: at half of
+    it the gas takes half of its volume share; a dry chamber's tip passes its gas."""
+    share = liquid.LAYER_FILL / 2
+    F0, gas, liq, _ = _centrifuged("tip", _x_of(share))
+    assert gas == pytest.approx(0.5 * (1 - share) * F0, rel=1e-9)
+    F0, gas, liq, _ = _centrifuged("tip", 0.0)
+    assert gas == F0 and liq == 0.0
 
 
 def test_centrifuged_leakage_needs_a_liquid_with_a_volume():
@@ -123,6 +169,18 @@ def test_centrifuged_leakage_needs_a_liquid_with_a_volume():
     raw["operating"]["gas_volume_fraction"] = 1.0
     with pytest.raises(CaseError, match="centrifuged"):
         pm.point(raw, table, str(pm.EXAMPLE))
+
+
+def test_centrifuged_leakage_refuses_walls_that_drag():
+    """Walls that drag flow against the pressure (the internal gear's interlobe lines
+    with wall_motion) would carry liquid out of a dry chamber: refused by name."""
+    path = pm.ROOT / "examples" / "default.toml"
+    raw = load_toml(path)
+    table = chamber_table(case_from_raw(raw, path), build_machine(case_from_raw(raw, path)))
+    raw["operating"].update(gas_volume_fraction=0.8, liquid_density_kg_m3=998.0)
+    raw.setdefault("leakage", {}).update(mixture="centrifuged", wall_motion=True)
+    with pytest.raises(CaseError, match="wall_motion"):
+        pm.point(raw, table, str(path))
 
 
 # --- the pump with its liquid ------------------------------------------------------------

@@ -92,6 +92,8 @@ BY_KEY: dict[str, Range] = {
     "operating.discharge_early_opening_deg": Range(-360.0, 360.0, "deg", "", ""),
     "leakage.zeta": Range(0.0, 100.0, "", "", "a loss coefficient no gap has"),
     "leakage.viscosity_Pa_s": Range(1e-7, 10.0, "Pa s", "", "was it given in cP or cSt?"),
+    "operating.liquid_viscosity_Pa_s": Range(1e-5, 10.0, "Pa s", "",
+                                             "was it given in cP or cSt?"),
     "numerics.rtol": Range(1e-12, 1e-2, "", "below round-off", "no digit of the answer is sure"),
     "numerics.atol": Range(0.0, 1e-2, "", "", "no digit of the answer is sure"),
     "numerics.cycle_rtol": Range(1e-14, 1e-2, "", "below round-off", "the cycle is not periodic"),

@@ -128,11 +128,14 @@ def test_centrifuged_tip_gaps_pass_the_liquid_by_its_own_law(x):
 
 
 def test_the_liquids_law_tends_to_poiseuille_and_to_the_orifice():
-    """A long land: plane Poiseuille flow rho h^3 dp / (12 mu L) per m; a short one: the
-    orifice h sqrt(2 rho dp)."""
+    """A long land: plane Poiseuille flow rho h^3 dp / (12 mu L) per m, linear in dp
+    down to x = 1 - 1e-5 (where the nozzle's smoothed drop, flows._x_eff, would be 10 %
+    of dp: it is the orifice's only); a short one: the orifice h sqrt(2 rho dp)."""
+    for x in (0.9, 1.0 - 1e-5):
+        dp = P1 * (1.0 - x)
+        assert _centrifuged("tip", _x_of(0.3), x=x, land=1.0)[2] == pytest.approx(
+            RHO_L * H**3 * dp / (12 * MU_L * 1.0), rel=1e-3)
     dp = P1 * 0.1
-    assert _centrifuged("tip", _x_of(0.3), land=1.0)[2] == pytest.approx(
-        RHO_L * H**3 * dp / (12 * MU_L * 1.0), rel=1e-3)
     assert _centrifuged("tip", _x_of(0.3), land=1e-9)[2] == pytest.approx(
         H * math.sqrt(2 * RHO_L * dp), rel=1e-3)
 
@@ -157,6 +160,8 @@ def test_a_drained_casing_gap_fades_to_the_gas():
     share = liquid.LAYER_FILL / 2
     F0, gas, liq, _ = _centrifuged("tip", _x_of(share))
     assert gas == pytest.approx(0.5 * (1 - share) * F0, rel=1e-9)
+    assert liq == pytest.approx((1 - 0.5 * (1 - share)) * _series_root(P1 * 0.1, 2e-3),
+                                rel=1e-6)  # (x = 0.9: the smoothing's 1e-6)
     F0, gas, liq, _ = _centrifuged("tip", 0.0)
     assert gas == F0 and liq == 0.0
 

@@ -118,6 +118,35 @@ def test_damaged_artifact_is_rebuilt_and_identical_content_stops_the_cascade(tmp
     assert "geometry" in record(build, "demo")["executed"]
 
 
+
+def test_checks_read_fresh_artifacts_and_skip_fresh_stages(tmp_path, monkeypatch):
+    """A rerun checks only the stages it will run, and the quasi-1D check reads a fresh
+    table from its artifact: building the chamber table is then an error here.  A stale
+    stage's refusal still comes, before anything is written.  (A port timing outside the
+    chamber's life cannot be asked with a fresh table: the table reads the timing.)"""
+    from rotorflow.errors import CaseError
+    from rotorflow.workflow import builtin, runner
+
+    build = tmp_path / "build"
+    case = case_copy(tmp_path, extra='\n[outputs]\nwant = ["quasi1d"]\n')
+    assert runner.run_case(case, build)["executed"] == ["table", "quasi1d"]
+
+    def rebuilt(_case):
+        raise AssertionError("the chamber table was built again")
+
+    monkeypatch.setattr(builtin, "_table", rebuilt)
+    assert runner.run_case(case, build)["skipped"] == ["table", "quasi1d"]
+    assert runner.up_to_date(case, build)
+    case.write_text(case.read_text().replace("p_discharge_bar = 2.6", "p_discharge_bar = 3.0"))
+    assert not runner.up_to_date(case, build)
+    assert runner.run_case(case, build)["executed"] == ["quasi1d"]
+    stamp = (build / "demo" / "quasi1d" / ".stage.json").read_text()
+    case.write_text(case.read_text().replace("p_discharge_bar = 3.0", "p_discharge_bar = -3"))
+    with pytest.raises(CaseError, match="p_discharge_bar"):
+        runner.run_case(case, build)
+    assert (build / "demo" / "quasi1d" / ".stage.json").read_text() == stamp
+
+
 @pytest.mark.parametrize("extra, word", [
     ('\n[outputs]\nwant = ["volume_curve"]\n', "volume_curve"),
     ('\n[outputs]\nwant = "table"\n', "want"),

@@ -66,17 +66,21 @@ def _table(case):
     return _memo(case, "table", lambda: chamber_table(case, _machine(case)))
 
 
-def check_quasi1d(case, case_path) -> None:
+def check_quasi1d(case, case_path, cached: dict) -> None:
     """The quasi-1D stage's refusals: its settings, and the port timing against the
-    chamber's life (on the chamber table the table stage then reuses)."""
+    chamber's life, on the chamber table: the table stage's artifact where it is fresh
+    (``cached``), else the one the table stage then reuses."""
+    from rotorflow.geometry import table
     from rotorflow.quasi1d import case_settings
     from rotorflow.quasi1d.simulate import chamber_of
 
     operating, _, _, numerics, _ = case_settings(case.raw, str(case_path))
-    chamber_of(_table(case), operating, numerics)
+    tab = (table.read(cached["table"] / "chamber_table.csv") if "table" in cached
+           else _table(case))
+    chamber_of(tab, operating, numerics)
 
 
-def check_solids(case, case_path) -> None:
+def check_solids(case, case_path, cached: dict) -> None:
     """The solids stage's refusals (its settings against the rotors: clearances, bores,
     cutter set-ups), without building a solid."""
     from rotorflow.geometry.export.driver import check

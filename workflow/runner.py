@@ -37,17 +37,59 @@ def _now() -> str:
     return time.strftime("%Y-%m-%dT%H:%M:%S%z")
 
 
-def prepare(case_path: Path, extra: list[str] | None = None):
-    """Validate the case and plan its stages; CaseError (exit 2) on bad input."""
+def plan_case(case_path: Path, extra: list[str] | None = None):
+    """(case, want, order): the case loaded and its stages planned (CaseError on what
+    loading and planning refuse; the stages' own checks are :func:`check`'s)."""
     from .case import load_case
 
     case = load_case(case_path)
     want = st.wanted(case.raw, case_path, extra)
-    order = st.plan(case.raw, want, case_path)
-    for name in order:  # an invalid case writes nothing: no stage runs before all pass
-        if st.REGISTRY[name].check:
-            resolve(st.REGISTRY[name].check)(case, case_path)
-    return case, want, order
+    return case, want, st.plan(case.raw, want, case_path)
+
+
+def fresh_stages(case, order: list[str], build: CaseBuild,
+                 forced: frozenset[str] = frozenset()) -> dict[str, str]:
+    """{stage: artifact hash} of the planned stages a run would skip: stamped with the key
+    their inputs give now, upstream stages all fresh too, not forced."""
+    fresh: dict[str, str] = {}
+    for name in order:  # upstream first, so every upstream hash is known
+        ups = st.upstream(name, order)
+        stamp = build.stamp(name)
+        if (name in forced or stamp is None or any(u not in fresh for u in ups)
+                or stamp["key"] != _key(case, st.REGISTRY[name], ups, fresh)):
+            continue
+        fresh[name] = stamp["artifact_hash"]
+    return fresh
+
+
+def check(case, case_path: Path, order: list[str], build: CaseBuild,
+          fresh: dict[str, str]) -> None:
+    """Every planned stage's refusals (CaseError, exit 2) before any stage writes.
+
+    A fresh stage is not checked again: its key covers its inputs and its code, so it
+    passed these checks when it ran.  (Checking it rebuilt a twin screw's chamber table,
+    ~5 s, on every rerun and for every point a sweep found cached.)  A check gets the
+    artifact folders of its fresh upstream stages, to read rather than recompute.  (A
+    stage found fresh here but stale under the run's lock, another run having changed
+    the build in between, runs unchecked: its run refuses the same input, as a failed
+    stage.)"""
+    for name in order:
+        stage = st.REGISTRY[name]
+        if stage.check and name not in fresh:
+            cached = {u: build.artifact(u) for u in st.upstream(name, order) if u in fresh}
+            resolve(stage.check)(case, case_path, cached)
+
+
+def prepare(case_path: Path, extra: list[str] | None = None, root: Path = DEFAULT_BUILD,
+            force: tuple[str, ...] = ()):
+    """Validate the case and plan its stages; CaseError (exit 2) on bad input.  (case,
+    want, order, build, fresh stages.)"""
+    case, want, order = plan_case(case_path, extra)
+    build = CaseBuild(Path(root), case.name)
+    forced = frozenset(order if "all" in force else force)
+    fresh = fresh_stages(case, order, build, forced)
+    check(case, case_path, order, build, fresh)
+    return case, want, order, build, fresh
 
 
 def _key(case, stage: st.Stage, ups: list[str], hashes: dict[str, str | None]) -> str:
@@ -58,17 +100,11 @@ def _key(case, stage: st.Stage, ups: list[str], hashes: dict[str, str | None]) -
 
 def up_to_date(case_path: Path, root: Path = DEFAULT_BUILD,
                extra: list[str] | None = None) -> bool:
-    """True when a run of the case would execute nothing (raises CaseError on bad input)."""
-    case, _, order = prepare(case_path, extra)
-    build = CaseBuild(Path(root), case.name)
-    hashes: dict[str, str | None] = {}
-    for name in order:  # upstream first, so every upstream hash is known
-        ups = st.upstream(name, order)
-        stamp = build.stamp(name)
-        if stamp is None or stamp["key"] != _key(case, st.REGISTRY[name], ups, hashes):
-            return False
-        hashes[name] = stamp["artifact_hash"]
-    return True
+    """True when a run of the case would execute nothing (raises CaseError on what
+    loading and planning refuse; a stage that would run is not checked here: its run
+    refuses it)."""
+    case, _, order = plan_case(case_path, extra)
+    return len(fresh_stages(case, order, CaseBuild(Path(root), case.name))) == len(order)
 
 
 def run_case(case_path: Path, root: Path = DEFAULT_BUILD, extra: list[str] | None = None,
@@ -80,8 +116,7 @@ def run_case(case_path: Path, root: Path = DEFAULT_BUILD, extra: list[str] | Non
     stage blocks its downstream stages; independent ones go on (``keep_going``).
     """
     case_path = Path(case_path)
-    case, want, order = prepare(case_path, extra)
-    build = CaseBuild(Path(root), case.name)
+    case, want, order, build, _ = prepare(case_path, extra, root, force)
     forced = set(order) if "all" in force else set(force)
     record = {
         "case": str(case_path), "name": case.name, "rotorflow": __version__,

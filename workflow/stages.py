@@ -75,8 +75,10 @@ class Stage:
     code: tuple[str, ...] = ()
     #: Bump to rebuild old artifacts even where the code hash cannot see a change.
     version: int = 1
-    #: "module:function" of ``f(case, case_path)``: everything the stage would refuse in
-    #: its input, found before any stage of a run writes anything (CaseError).
+    #: "module:function" of ``f(case, case_path, cached)``: everything the stage would
+    #: refuse in its input, found before any stage of a run writes anything (CaseError);
+    #: ``cached`` maps the fresh upstream stages to their artifact folders.  Only a stage
+    #: that will run is checked (:func:`rotorflow.workflow.runner.check`).
     check: str | None = None
 
     @property

@@ -15,8 +15,8 @@ from .table import ChamberTable, opening_column, track_column
 
 def build_machine(case, points_per_period: int | None = None) -> SweptMachine:
     """The case's pair swept by its sweep law (a wrap given as wrap_bar needs the
-    chamber's planar life first)."""
-    ppp = points_per_period or POINTS_PER_PERIOD
+    chamber's planar life first), at the case's points per period unless given."""
+    ppp = points_per_period or getattr(case, "points_per_period", POINTS_PER_PERIOD)
     life = None
     if case.wrap is None:
         sec = case.pair.section(ppp)

@@ -1,9 +1,11 @@
 """The `rotorflow geometry` and `rotorflow table` commands: output, and bad input."""
 
 import json
+import math
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from rotorflow.geometry import table
@@ -44,6 +46,23 @@ def test_table_round_trip(tmp_path):
     assert sorted(p.name for p in target.parent.iterdir()) == ["chamber.csv", "chamber.json"]
 
 
+def test_points_per_period_sets_the_tables_angle_step(tmp_path):
+    """[machine] points_per_period: the table's rows are a lobe period over that many
+    apart, and the largest volume moves by less than the 1e-4 the benches hold at 24."""
+    case = tmp_path / "coarse.toml"
+    case.write_text(GOOD.replace("[machine]", "[machine]\npoints_per_period = 24"))
+    out = run("table", case, "--out", tmp_path / "coarse.csv")
+    assert out.returncode == 0, out.stderr
+    coarse = table.read(tmp_path / "coarse.csv")
+    out = run("table", CASES / "default.toml", "--out", tmp_path / "fine.csv")
+    assert out.returncode == 0, out.stderr
+    fine = table.read(tmp_path / "fine.csv")
+    period = 2 * math.pi / coarse.lobes_outer
+    assert np.diff(coarse.angle_rad) == pytest.approx(period / 24, rel=1e-9)
+    assert np.diff(fine.angle_rad) == pytest.approx(period / 96, rel=1e-9)
+    assert coarse.volume_m3.max() == pytest.approx(fine.volume_m3.max(), rel=1e-4)
+
+
 BAD = {
     "lambda <= 1": (GOOD.replace("lambda = 1.39934", "lambda = 0.9"), "lambda"),
     "sigma above limit": (GOOD.replace("sigma_bar = 1.0", "sigma = 0.9"), "undercut"),
@@ -51,6 +70,11 @@ BAD = {
     "zero length": (GOOD.replace("length_mm = 100", "length_mm = 0"), "length_mm"),
     "negative diameter": (GOOD.replace("diameter_mm = 100", "diameter_mm = -5"), "diameter"),
     "unknown key": (GOOD.replace("[sweep]", "[sweep]\ncolour = 'red'"), "colour"),
+    "too few points per period": (GOOD.replace("[machine]", "[machine]\npoints_per_period = 8"),
+                                  "points_per_period"),
+    "fractional points per period": (GOOD.replace("[machine]",
+                                                  "[machine]\npoints_per_period = 24.5"),
+                                     "points_per_period"),
     "unknown section": (GOOD + "\n[turbo]\nx = 1\n", "turbo"),
     "malformed": (GOOD.replace("lambda = 1.39934", "lambda = = 1"), "malformed"),
     # the registry names the families it knows

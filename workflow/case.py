@@ -15,12 +15,18 @@ from pathlib import Path
 from rotorflow.errors import CaseError
 from rotorflow.geometry.family import RotorPair, family_for, number
 from rotorflow.geometry.ports import DISCHARGE_PORTS
+from rotorflow.geometry.section import POINTS_PER_PERIOD
 from rotorflow.geometry.sweep import Sweep
 
 from .plausible import check_plausible
 
 #: [machine] keys of every family; each family adds its own (geometry.family.Family.keys).
-MACHINE_KEYS = {"type", "length_mm"}
+MACHINE_KEYS = {"type", "length_mm", "points_per_period"}
+#: Bounds of [machine] points_per_period, the chamber tables' angle samples per lobe
+#: period: below 12 a twin screw's port events crowd one cell (at 20 its discharge area
+#: errs by 2.5e-4 to 8.8e-4, bench/bench_twin_screw.py); above 1536 a table costs
+#: minutes (the benches' references stop at 768).
+POINTS_PER_PERIOD_RANGE = (12, 1536)
 SWEEP_KEYS = {"kind", "wrap_outer_deg", "wrap_bar", "diameter_end_mm", "lead_ratio"}
 #: A family's rotors may give the wrap by name (wrap_male_deg, wrap_female_deg, ...): any
 #: rotor's wrap fixes the others' through the lobe ratio (a rotor's twist is its speed
@@ -51,6 +57,8 @@ class Case:
     #: [operating] discharge_port: which discharge ports the chamber table opens
     #: (geometry.ports.DISCHARGE_PORTS); "axial", the end-plate port alone, by default.
     discharge_port: str = "axial"
+    #: [machine] points_per_period: angle samples per lobe period of the chamber tables.
+    points_per_period: int = POINTS_PER_PERIOD
 
     def sweep(self, life_2d: float) -> Sweep:
         """The sweep law; a wrap given as wrap_bar needs the profile's chamber life."""
@@ -89,7 +97,7 @@ def case_from_raw(data: dict, path: Path) -> Case:
         if name not in SECTIONS:
             raise CaseError(f"unknown section [{name}] in {path}")
     check_plausible(data, path)
-    pair, length = _machine(data, path)
+    pair, length, points = _machine(data, path)
     kind, wrap, wrap_bar, scale_end, lead_ratio = _sweep_law(data, path, pair)
     volume_ratio, driven, discharge_port = _operating(data, path, pair)
     validate_stage_sections(data, path, pair)
@@ -107,11 +115,13 @@ def case_from_raw(data: dict, path: Path) -> Case:
         driven=driven,
         raw=data,
         discharge_port=discharge_port,
+        points_per_period=points,
     )
 
 
-def _machine(data: dict, path: Path) -> tuple[RotorPair, float]:
-    """[machine]: the family's pair, and the rotor length [m]."""
+def _machine(data: dict, path: Path) -> tuple[RotorPair, float, int]:
+    """[machine]: the family's pair, the rotor length [m] and the chamber tables' points
+    per period."""
     if "machine" not in data:
         raise CaseError(f"missing section [machine] in {path}")
     m = data["machine"]
@@ -127,8 +137,13 @@ def _machine(data: dict, path: Path) -> tuple[RotorPair, float]:
     length = number(m, "length_mm", where) * 1e-3
     if not length > 0.0:
         raise CaseError(f"length_mm must be positive in {where}")
+    points = m.get("points_per_period", POINTS_PER_PERIOD)
+    lo, hi = POINTS_PER_PERIOD_RANGE
+    if isinstance(points, bool) or not isinstance(points, int) or not lo <= points <= hi:
+        raise CaseError(f"points_per_period must be an integer from {lo} to {hi} in {where}, "
+                        f"got {points!r}")
     pair = family.from_section({k: v for k, v in m.items() if k in family.keys}, where)
-    return pair, length
+    return pair, length, points
 
 
 def _wrap_keys(pair: RotorPair) -> dict[str, float]:

@@ -11,8 +11,8 @@ lower resolution's angles).  Output: results_dir/pump_profiles.csv.
 
     python -m bench.bench_pump_profiles
 
-Last measured (2026-11-29, idle 2-core machine, 38 s in all), at 24 / 48 / 96 points
-per period: CPU 1.2-1.4 / 1.6-1.7 / 2.3-2.4 s for each profile; V_max within 9e-7
+Last measured (2026-11-30, session 35, 39 s in all), at 24 / 48 / 96 points per
+period: CPU 1.2-1.5 / 1.6-1.8 / 2.4-2.5 s for each profile; V_max within 9e-7
 (involute at 24) and 4e-11 to 5e-9 at 96; the blow-hole within 2e-15 (its width is the
 pocket's or the cusp line's cut at any angle: only which chamber lies beyond comes from
 the nodes; at 384 the trochoidal's was twice its value until a stray node's booking was
@@ -21,10 +21,12 @@ order).  The interlobe lines: circular 2e-7 / 8e-8 / 7e-9, involute 3e-14 (it
 converged at first order, 8.3e-3 / 3.9e-3 / 1.7e-3, its largest length 108.36 to
 109.27 mm from 24 to 384, until its contact's crossing of the cusp line, at the pitch
 point and on a node, was located: geometry/twin_screw/track_ends.py, 109.32599 mm at
-every resolution now), trochoidal 3.0e-2 / 1.2e-2 / 3.4e-3 (and 384 lies below 192 by
-0.2 %: not monotone, as the pin-cycloid's interlobe lines beyond 384 in
-bench_twin_screw.py; the cause is not found yet; the involute with 10 mm circles
-jumps by 0.3 % between 48 and 96, not found either).
+every resolution now), trochoidal 1.0e-5 / 3.0e-7 / 8.2e-9 (fifth order; it was
+3.0e-2 / 1.2e-2 / 3.4e-3, first order, with 384 below 192 by 0.2 %, until the lands'
+joints with the line of centres were located, the crossing of the cusp line sought
+over lost nodes and a corner contact's rate taken with its rotor:
+tests/test_twin_screw_trochoidal_lines.py checks both lines against closed forms).
+The involute with 10 mm circles jumps by 0.3 % between 48 and 96 (cause not found).
 """
 
 from __future__ import annotations

@@ -23,7 +23,11 @@ such event here has a closed form or a root (:attr:`..section.Track.cuts`):
   lacked against the rack's contact line);
 * a joint: where the contact passes from one arc of the profile to the next its rate
   jumps (the curvature does), so the cubic through the nodes either side must not span
-  it; the male angle at which the joint meshes is the arc's own rolling angle there.
+  it; the male angle at which the joint meshes is the arc's own rolling angle there;
+* a land's corner (the trochoidal pump's): a land touches its mate's root at one
+  fixed point of the line of centres while it passes it, and its corners' contacts
+  on the mate's flanks set out from there or come back to it: the angle at which a
+  corner meets that line, a closed form.
 
 An event with no such form keeps the half step (NaN cut).
 """
@@ -87,6 +91,7 @@ def refine(pair, psi: np.ndarray, track):
     h = psi[1] - psi[0]
     n = len(psi)
     reach = _reach(h)
+    tol = SAME_EVENT * pair.gearing.centre_distance
     for psi_b, length, mid, shadow in _breaks(pair, psi):
         before = np.nonzero(psi <= psi_b - shadow)[0]
         after = np.nonzero(psi >= psi_b + shadow)[0]
@@ -104,10 +109,12 @@ def refine(pair, psi: np.ndarray, track):
         lo = _nearest_present(track.present, lo, -1, reach)
         hi = _nearest_present(track.present, hi, 1, reach)
         # The sides on which the track has this contact there: it may begin or end at
-        # the event (a chamber born at a band), or change its chamber beyond.
+        # the event (a chamber born at a band), or change its chamber beyond.  A contact
+        # at rest there (a land on its mate's root) has no rate to allow for, only its
+        # rounding.
         sides = [j for j in (lo, hi) if 0 <= j < n and track.present[j]
                  and np.linalg.norm(track.points[j] + (psi_b - psi[j]) * track.rates[j] - mid)
-                 <= 0.5 * length + 2.0 * (h + shadow) * np.linalg.norm(track.rates[j])]
+                 <= 0.5 * length + 2.0 * (h + shadow) * np.linalg.norm(track.rates[j]) + tol]
         if not sides:
             continue  # this chamber's contact is elsewhere
         # The stretches either side end there (no rate is interpolated across), and
@@ -123,13 +130,31 @@ def refine(pair, psi: np.ndarray, track):
         ids[min(hi, n):] += 1
         if length > 0.0 and sides == [lo, hi] and offset[lo] == offset[hi]:
             bridges.append((float(psi_b), length, int(offset[hi])))
+    _crossing_cuts(pair, psi, track, present, cuts, reach)
+    return dataclasses.replace(track, present=present, ids=ids, cuts=cuts, start=start,
+                               bridges=tuple(bridges))
+
+
+def _crossing_cuts(pair, psi, track, present, cuts, reach: int) -> None:
+    """Fill ``cuts`` where the track begins, ends or changes its chamber beyond with no
+    cut yet: where its contact crosses the cusp line (NaN where it does not)."""
+    offset, n = track.offset, len(psi)
     change = (present[:-1] != present[1:]) | (present[:-1] & present[1:]
                                               & (offset[:-1] != offset[1:]))
     for i in np.nonzero(change & np.isnan(cuts[:-1]))[0]:
         j, k = (i, i + 1) if present[i] else (i + 1, i)
-        cuts[i] = _cusp_line_cut(pair, track.points[j], track.rates[j], psi[j], psi[k])
-    return dataclasses.replace(track, present=present, ids=ids, cuts=cuts, start=start,
-                               bridges=tuple(bridges))
+        cut = _cusp_line_cut(pair, track.points[j], track.rates[j], psi[j], psi[k])
+        # Near a cusp the track may have lost the nodes next to its crossing, as next to
+        # an event (the sliver beyond the contact below the polygons' resolution): the
+        # crossing is sought over them too, up to the track's next node.  At 768 nodes
+        # per period the trochoidal's corner contacts lose one node either side of the
+        # crossing, and their lines ended half a step off it (6e-3 of the line).
+        far = k
+        while (np.isnan(cut) and not present[far] and abs(far - j) < reach
+               and 0 <= far + (k - j) < n):
+            far += k - j
+            cut = _cusp_line_cut(pair, track.points[j], track.rates[j], psi[j], psi[far])
+        cuts[i] = cut
 
 
 def _reach(h: float) -> int:
@@ -298,7 +323,7 @@ def contact_breaks(pair) -> tuple:
             bands.append((phase, length, piece.eval(np.array([0.5]), 0)[0] @ turn.T, shadow))
     out = list(bands)
     tol = SAME_EVENT * g.centre_distance
-    for e in ends:
+    for e in ends + _land_joints(pair):
         if any(abs(math.remainder(e[0] - b[0], period)) < SAME_EVENT for b in bands):
             continue
         if any(abs(math.remainder(e[0] - o[0], period)) < SAME_EVENT
@@ -306,6 +331,36 @@ def contact_breaks(pair) -> tuple:
             continue  # one piece's end is the next one's start
         out.append(e)
     return tuple(out)
+
+
+def _land_joints(pair) -> list:
+    """(male angle, 0, point, JOINT_NODE) of every corner of lobe 0's lands passing the
+    line of centres on its mate's side.  A land is a circle about its own rotor's axis:
+    its normals pass the pitch point on that line alone, so it touches its mate's root
+    there, at one fixed point, from the instant one corner reaches the line until the
+    other leaves it; and the corners' own contacts on the mate's flanks (the trochoidal
+    pump's) begin or end at those instants, at that point.  The land's piece is given
+    no rolling angle, so these joints are not among the pieces' ends (given one, the
+    contact search would rest the contact on a corner between the instants its two
+    pieces mesh their ends there, and a trochoidal corner seals on the far side of
+    them: from the line of centres to the cusp, not from the cusp back).  Left halfway
+    they cost the trochoidal's interlobe lines half a step of wrap each, an error of
+    the first order (5e-3 of the land's line at 96 points per period)."""
+    g = pair.gearing
+    out = []
+    for rotor, profile in ((MALE, pair.male), (FEMALE, pair.female)):
+        if not pair.land_half_width(rotor) > 0.0:
+            continue
+        for p in pair.corner_points(profile)[:2]:
+            theta = math.atan2(p[1], p[0])
+            radius = float(np.linalg.norm(p))
+            if rotor == MALE:  # turned by psi: at polar angle 0, facing the female
+                angle, x = -theta, radius
+            else:  # turned by -psi N1 / N2: at polar angle pi about the female axis
+                angle, x = (theta - math.pi) * g.lobes_female / g.lobes_male, \
+                    g.centre_distance - radius
+            out.append((angle, 0.0, np.array([x, 0.0]), JOINT_NODE))
+    return out
 
 
 def _turn(angle: float) -> np.ndarray:

@@ -44,12 +44,13 @@ RESOLUTIONS = (24, 48, 96, 192)
 #: tip passes a cusp and are swept at fourth order between those events (geometry/
 #: load_sweep.py): Pi_max at 24 to 192 lies within 2.5e-5 of 768, and 768 within 4e-7 of
 #: 1536 (circular 1e-8).  (As the loads' linear interpolant it converged at first order:
-#: 192 left it 1.2e-4 from its limit.)  The lines at 24 to 384 lie within 6e-7
-#: (pin-cycloid) and 5.1e-5 / 7e-7 / 1.6e-7 / 4.8e-9 / 1.8e-10 (circular, 24 to 384) of
-#: it.  (Their reference was 192 while the pin-cycloid's interlobe lines shrank by 4e-3
-#: from 384 on: a track's lost nodes before its joint were counted in steps, and a
-#: contact search started too far from its contact, geometry/twin_screw/track_ends.py
-#: and contact_search.py.)
+#: 192 left it 1.2e-4 from its limit.)  The lines at 24 to 384 lie within 3e-9
+#: (pin-cycloid; 6e-7 until 2026-11-30, when a contact resting on a male corner was
+#: given the male's turning, geometry/twin_screw/contact_search.py) and 5.1e-5 / 7e-7 /
+#: 1.6e-7 / 4.8e-9 / 1.8e-10 (circular, 24 to 384) of it.  (Their reference was 192
+#: while the pin-cycloid's interlobe lines shrank by 4e-3 from 384 on: a track's lost
+#: nodes before its joint were counted in steps, and a contact search started too far
+#: from its contact, geometry/twin_screw/track_ends.py and contact_search.py.)
 REFERENCE = 768
 #: Samples per period of the reference's swept sealed regions (a table's: its section
 #: grid, twice its points per period).  On one 24-point machine, 384 samples are 4e-5

@@ -118,7 +118,6 @@ def test_damaged_artifact_is_rebuilt_and_identical_content_stops_the_cascade(tmp
     assert "geometry" in record(build, "demo")["executed"]
 
 
-
 def test_checks_read_fresh_artifacts_and_skip_fresh_stages(tmp_path, monkeypatch):
     """A rerun checks only the stages it will run, and the quasi-1D check reads a fresh
     table from its artifact: building the chamber table is then an error here.  A stale
@@ -145,6 +144,33 @@ def test_checks_read_fresh_artifacts_and_skip_fresh_stages(tmp_path, monkeypatch
     with pytest.raises(CaseError, match="p_discharge_bar"):
         runner.run_case(case, build)
     assert (build / "demo" / "quasi1d" / ".stage.json").read_text() == stamp
+
+
+def test_a_refitted_flow_coefficient_reruns_the_model(tmp_path):
+    """The case names the CFD fit's file; the key holds its contents, so a refit (the
+    same name) reruns the quasi-1D model and moves its result."""
+    from rotorflow.quasi1d.calibrated import FlowCoefficientFit
+    from rotorflow.workflow import runner
+
+    def refit(cd):  # a constant flow coefficient cd (A = 1 / cd^2, no viscous term)
+        fit = FlowCoefficientFit(inertial_features=("1",), inertial=(1.0 / cd**2,),
+                                 viscous=0.0)
+        (tmp_path / "fit.json").write_text(fit.to_json())
+
+    refit(0.7)
+    case = case_copy(tmp_path, edit=('model = "nozzle"',
+                                     'model = "cfd-calibrated"\ncorrelation = "fit.json"'),
+                     extra='\n[outputs]\nwant = ["quasi1d"]\n')
+    build = tmp_path / "build"
+    summary = build / "demo" / "quasi1d" / "summary.json"
+    assert runner.run_case(case, build)["executed"] == ["table", "quasi1d"]
+    before = json.loads(summary.read_text())["leakage_kg_s"]
+    assert runner.run_case(case, build)["executed"] == []
+    refit(0.3)
+    assert not runner.up_to_date(case, build)
+    assert runner.run_case(case, build)["executed"] == ["quasi1d"]
+    after = json.loads(summary.read_text())["leakage_kg_s"]
+    assert sum(after.values()) < 0.6 * sum(before.values())  # the leakage scales with Cd
 
 
 @pytest.mark.parametrize("extra, word", [
@@ -179,7 +205,6 @@ def test_asking_for_a_stage_without_its_input_exits_2(tmp_path):
     assert len(out.stderr.strip().splitlines()) == 1
     out = rotorflow("run", tmp_path / "missing.toml")
     assert out.returncode == 2 and "not found" in out.stderr
-
 
 
 @pytest.mark.parametrize("edit, word", [

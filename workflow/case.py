@@ -57,7 +57,8 @@ class Case:
     #: [operating] discharge_port: which discharge ports the chamber table opens
     #: (geometry.ports.DISCHARGE_PORTS); "axial", the end-plate port alone, by default.
     discharge_port: str = "axial"
-    #: [machine] points_per_period: angle samples per lobe period of the chamber tables.
+    #: [machine] points_per_period: angle samples per lobe period of the machine's chamber
+    #: curves and tables (its figures, loads and port timing, the table's rows).
     points_per_period: int = POINTS_PER_PERIOD
 
     def sweep(self, life_2d: float) -> Sweep:

@@ -21,7 +21,7 @@ from rotorflow import __version__
 from rotorflow.errors import RotorflowError
 
 from . import stages as st
-from .cache import CaseBuild, StageContext, code_hash, read_stamp, seal, stage_key
+from .cache import CaseBuild, StageContext, code_hash, file_hash, read_stamp, seal, stage_key
 
 log = logging.getLogger(__name__)
 
@@ -93,9 +93,15 @@ def prepare(case_path: Path, extra: list[str] | None = None, root: Path = DEFAUL
 
 
 def _key(case, stage: st.Stage, ups: list[str], hashes: dict[str, str | None]) -> str:
-    """A stage's key, once the artifact hashes of its upstream stages are known."""
-    return stage_key(stage.name, stage.version, st.select(case.raw, stage.reads),
-                     {u: hashes[u] for u in ups}, code_hash(stage.code_modules))
+    """A stage's key, once the artifact hashes of its upstream stages are known: with
+    the contents of the files its inputs name (a missing one is the case loader's
+    refusal)."""
+    inputs = st.select(case.raw, stage.reads)
+    files = {str(p): file_hash(p) for p in stage.files(case.raw, case.path) if p.is_file()}
+    if files:
+        inputs = {**inputs, "files": files}
+    return stage_key(stage.name, stage.version, inputs, {u: hashes[u] for u in ups},
+                     code_hash(stage.code_modules))
 
 
 def up_to_date(case_path: Path, root: Path = DEFAULT_BUILD,

@@ -55,6 +55,22 @@ def _yes(raw: dict) -> bool:
     return True
 
 
+def _no_files(raw: dict, case_path) -> list:
+    return []
+
+
+def _leakage_files(raw: dict, case_path) -> list:
+    """The CFD flow-coefficient fits [leakage] and its paths name (``correlation``,
+    relative to the case file): a refit must rerun the model, not only a renamed file."""
+    from pathlib import Path
+
+    leak = raw.get("leakage")
+    sections = [leak] if isinstance(leak, dict) else []
+    sections += [v for v in (leak or {}).values() if isinstance(v, dict)]
+    names = [d["correlation"] for d in sections if isinstance(d.get("correlation"), str)]
+    return [Path(n) if Path(n).is_absolute() else Path(case_path).parent / n for n in names]
+
+
 @dataclass(frozen=True)
 class Stage:
     name: str
@@ -70,6 +86,9 @@ class Stage:
     figures: str | None = None
     missing: Callable[[dict], str | None] = field(default=_always, repr=False)
     default: Callable[[dict], bool] = field(default=_yes, repr=False)
+    #: ``files(raw, case_path)``: the files the stage reads whose paths the case names;
+    #: their contents are part of the key (the case holds only their names).
+    files: Callable[[dict, object], list] = field(default=_no_files, repr=False)
     #: Modules and packages whose source is part of the key (with the run function's
     #: module): a stage reruns when its code changes.
     code: tuple[str, ...] = ()
@@ -261,6 +280,7 @@ register(Stage(
     missing=_needs_operating_point,
     default=lambda raw: _needs_operating_point(raw) is None,
     check=f"{_IMPL}:check_quasi1d",
+    files=_leakage_files,
 ))
 register(Stage(
     name="render",

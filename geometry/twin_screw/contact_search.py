@@ -259,7 +259,7 @@ class ContactSearch:
         law_u = float(law[0] - law[1]) / (2.0 * h)
         law_psi = float(cross(n, dpitch))
         du = -law_psi / law_u if law_u != 0.0 else 0.0
-        if self._on_corner(u):
+        if self._on_corner(u) and self._rests(float(round(u)), psi):
             # Resting on a corner the contact turns with the male; the difference
             # across the corner is the law's jump there, not its slope, and left a
             # rate 2e-5 off on the trochoidal's land corners (their interlobe lines
@@ -272,7 +272,9 @@ class ContactSearch:
 
     def _on_corner(self, u: float) -> bool:
         """Whether male parameter u lies at a joint where the profile turns (a corner),
-        within CORNER_STEP."""
+        within CORNER_STEP.  (Whether the contact rests there at an angle is
+        :meth:`_rests`'s: a corner a contact passes at one instant has the rate of the
+        piece it moves on.)"""
         k = round(u)
         if abs(u - k) > CORNER_STEP:
             return False

@@ -148,9 +148,11 @@ def _crossing_cuts(pair, psi, track, present, cuts, reach: int) -> None:
         # an event (the sliver beyond the contact below the polygons' resolution): the
         # crossing is sought over them too, up to the track's next node.  At 768 nodes
         # per period the trochoidal's corner contacts lose one node either side of the
-        # crossing, and their lines ended half a step off it (6e-3 of the line).
+        # crossing, and their lines ended half a step off it (6e-3 of the line).  Only
+        # nodes the track lost are crossed, not those an event's shadow took from it:
+        # the contact is not extrapolated across an event.
         far = k
-        while (np.isnan(cut) and not present[far] and abs(far - j) < reach
+        while (np.isnan(cut) and not track.present[far] and abs(far - j) < reach
                and 0 <= far + (k - j) < n):
             far += k - j
             cut = _cusp_line_cut(pair, track.points[j], track.rates[j], psi[j], psi[far])

@@ -270,3 +270,11 @@ class FlowCoefficientFit:
     def load(cls, path: Path) -> FlowCoefficientFit:
         return cls.from_json(Path(path).read_text())
 
+
+def correlation_path(name: str, where: str) -> Path:
+    """Where the flow-coefficient fit a case names (``correlation``) lies: relative to
+    the case file ``where``."""
+    path = Path(name)
+    if not path.is_absolute() and Path(where).parent.is_dir():
+        path = Path(where).parent / path
+    return path

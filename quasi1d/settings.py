@@ -343,17 +343,13 @@ def _accommodation(d: dict, section: str, where: str) -> float:
 
 def _load_correlation(d: dict, section: str, where: str):
     """The CFD flow-coefficient fit named by ``correlation`` (relative to the case file)."""
-    from pathlib import Path
-
-    from .calibrated import FlowCoefficientFit
+    from .calibrated import FlowCoefficientFit, correlation_path
 
     name = d.get("correlation")
     if not isinstance(name, str):
         raise CaseError(f"key 'correlation' in [{section}] of {where} must name the fit's "
                         "JSON file (model \"cfd-calibrated\")")
-    path = Path(name)
-    if not path.is_absolute() and Path(where).parent.is_dir():
-        path = Path(where).parent / path
+    path = correlation_path(name, where)
     if not path.is_file():
         raise CaseError(f"flow-coefficient fit not found: {path} ([{section}] of {where})")
     try:

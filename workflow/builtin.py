@@ -15,6 +15,8 @@ from .cache import StageContext, digest
 
 log = logging.getLogger(__name__)
 
+#: The table stage's chamber table (the quasi-1D stage and its check read it).
+TABLE_CSV = "chamber_table.csv"
 #: Machines and chamber tables kept in memory per process: the geometry and table stages
 #: of one case (and of consecutive sweep points on one worker) share one computation.
 MEMO_SIZE = 8
@@ -75,7 +77,7 @@ def check_quasi1d(case, case_path, cached: dict) -> None:
     from rotorflow.quasi1d.simulate import chamber_of
 
     operating, _, _, numerics, _ = case_settings(case.raw, str(case_path))
-    tab = (table.read(cached["table"] / "chamber_table.csv") if "table" in cached
+    tab = (table.read(cached["table"] / TABLE_CSV) if "table" in cached
            else _table(case))
     chamber_of(tab, operating, numerics)
 
@@ -107,7 +109,7 @@ def run_table(ctx: StageContext) -> dict:
     from rotorflow.geometry import table
 
     tab = _table(ctx.case)
-    table.write(tab, ctx.out / "chamber_table.csv")
+    table.write(tab, ctx.out / TABLE_CSV)
     return {"rows": int(len(tab.angle_rad))}
 
 
@@ -115,7 +117,7 @@ def run_quasi1d(ctx: StageContext) -> dict:
     from rotorflow.geometry import table
     from rotorflow.quasi1d import case_settings, simulate
 
-    tab = table.read(ctx.input("table") / "chamber_table.csv")
+    tab = table.read(ctx.input("table") / TABLE_CSV)
     result = simulate(tab, *case_settings(ctx.raw, str(ctx.case_path)))
     summary = result.summary()
     write_json(ctx.out / "summary.json", summary)

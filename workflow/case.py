@@ -138,11 +138,12 @@ def _machine(data: dict, path: Path) -> tuple[RotorPair, float, int]:
     length = number(m, "length_mm", where) * 1e-3
     if not length > 0.0:
         raise CaseError(f"length_mm must be positive in {where}")
-    points = m.get("points_per_period", POINTS_PER_PERIOD)
+    points = (number(m, "points_per_period", where, integer=True)
+              if "points_per_period" in m else POINTS_PER_PERIOD)
     lo, hi = POINTS_PER_PERIOD_RANGE
-    if isinstance(points, bool) or not isinstance(points, int) or not lo <= points <= hi:
-        raise CaseError(f"points_per_period must be an integer from {lo} to {hi} in {where}, "
-                        f"got {points!r}")
+    if not lo <= points <= hi:
+        raise CaseError(f"points_per_period must lie from {lo} to {hi} in {where}, "
+                        f"got {points}")
     pair = family.from_section({k: v for k, v in m.items() if k in family.keys}, where)
     return pair, length, points
 

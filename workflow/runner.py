@@ -83,13 +83,12 @@ def check(case, case_path: Path, order: list[str], build: CaseBuild,
 def prepare(case_path: Path, extra: list[str] | None = None, root: Path = DEFAULT_BUILD,
             force: tuple[str, ...] = ()):
     """Validate the case and plan its stages; CaseError (exit 2) on bad input.  (case,
-    want, order, build, fresh stages.)"""
+    want, order, build, the stages forced to rerun.)"""
     case, want, order = plan_case(case_path, extra)
     build = CaseBuild(Path(root), case.name)
     forced = frozenset(order if "all" in force else force)
-    fresh = fresh_stages(case, order, build, forced)
-    check(case, case_path, order, build, fresh)
-    return case, want, order, build, fresh
+    check(case, case_path, order, build, fresh_stages(case, order, build, forced))
+    return case, want, order, build, forced
 
 
 def _key(case, stage: st.Stage, ups: list[str], hashes: dict[str, str | None]) -> str:
@@ -122,8 +121,7 @@ def run_case(case_path: Path, root: Path = DEFAULT_BUILD, extra: list[str] | Non
     stage blocks its downstream stages; independent ones go on (``keep_going``).
     """
     case_path = Path(case_path)
-    case, want, order, build, _ = prepare(case_path, extra, root, force)
-    forced = set(order) if "all" in force else set(force)
+    case, want, order, build, forced = prepare(case_path, extra, root, force)
     record = {
         "case": str(case_path), "name": case.name, "rotorflow": __version__,
         "build": str(build.folder), "pid": os.getpid(), "started": _now(),

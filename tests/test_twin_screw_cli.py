@@ -81,3 +81,23 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, name):
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and word in lines[0], out.stderr
     assert sorted(tmp_path.iterdir()) == before
+
+
+@pytest.mark.parametrize("lobes", [(4, 5), (5, 7), (6, 8)])
+def test_the_pin_cycloid_remedies_build_as_printed(lobes):
+    """The refusal of a pin-cycloid female off its pitch circle names two remedies; each,
+    copied as printed, must build (at 6 digits the 5/7 pair's centre distance was
+    refused again as "96 mm, not 96 mm")."""
+    import re
+
+    from rotorflow.errors import CaseError
+    from rotorflow.geometry.twin_screw.family import build
+
+    m, f = lobes
+    with pytest.raises(CaseError) as err:
+        build("pin-cycloid", m, f, 0.080, 0.100, 0.096)
+    given = dict(re.findall(r"(female_diameter_mm|centre_distance_mm) = ([0-9.e+-]+)",
+                            str(err.value)))
+    assert set(given) == {"female_diameter_mm", "centre_distance_mm"}, str(err.value)
+    build("pin-cycloid", m, f, 0.080, 0.100, float(given["female_diameter_mm"]) * 1e-3)
+    build("pin-cycloid", m, f, float(given["centre_distance_mm"]) * 1e-3, 0.100, 0.096)

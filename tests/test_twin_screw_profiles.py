@@ -341,3 +341,26 @@ def test_a_lobe_that_crosses_itself_is_a_named_loop():
                                         r"male primary arc 'rising' .* and the male primary "
                                         r"arc 'diagonal'"):
         check_no_loop(bow_tie, C)
+
+
+def test_an_undercut_names_the_tip_radii_that_avoid_it():
+    """The circular 5/6 rack on these diameters undercuts at its default tip circle; the
+    refusal names a window of tip_radius_mm, and the whole pair (loops and interference
+    checked too) builds at its printed edges and middle and undercuts 0.05 mm outside
+    either edge.  The 5/7 rack has no such window, and says so."""
+    import re
+
+    from rotorflow.geometry.twin_screw.family import build
+
+    with pytest.raises(CaseError) as err:
+        build("circular", 5, 6, C, D_MALE, D_FEMALE)
+    found = re.search(r"tip_radius_mm from ([0-9.]+) to ([0-9.]+) gives", str(err.value))
+    assert found and "the default tip_radius_mm is 16.95" in str(err.value), str(err.value)
+    lo, hi = (float(v) for v in found.groups())
+    for r in (lo, 0.5 * (lo + hi), hi):
+        build("circular", 5, 6, C, D_MALE, D_FEMALE, tip_radius=r * 1e-3)
+    for r in (lo - 0.05, hi + 0.05):
+        with pytest.raises(CaseError, match="undercut"):
+            build("circular", 5, 6, C, D_MALE, D_FEMALE, tip_radius=r * 1e-3)
+    with pytest.raises(CaseError, match="no tip_radius_mm gives a circular rack without"):
+        build("circular", 5, 7, C, D_MALE, D_FEMALE)

@@ -50,6 +50,7 @@ from .pump_profiles import (
     involute_pair,
     trochoidal_pair,
 )
+from .tip_window import RACKS, remedy
 
 KEYS = frozenset({"profile", "lobes_male", "lobes_female", "centre_distance_mm",
                   "male_diameter_mm", "female_diameter_mm", "tip_radius_mm",
@@ -121,6 +122,7 @@ def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: flo
     if hf < -PITCH_TOL * centre_distance:
         raise CaseError(f"the female diameter {female_diameter * 1e3:.4g} mm is inside its "
                         f"pitch circle ({2e3 * g.r2:.4g} mm)")
+    given = tip_radius is not None
     if pressure_angle is not None:
         if profile != "involute":
             raise CaseError(f"pressure_angle_deg applies to the involute profile only, not "
@@ -129,7 +131,7 @@ def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: flo
             raise CaseError("give tip_radius_mm or pressure_angle_deg, not both: each sets "
                             "the other on the involute rack")
         tip_radius = circle_radius(g, hm, pressure_angle)
-    elif tip_radius is None and profile not in OWN_TIP_RADIUS:
+    if tip_radius is None and profile not in OWN_TIP_RADIUS:
         tip_radius = centred_tip_radius(g, hm, hf)
         if profile == "line-circle":
             tip_radius *= LINE_CIRCLE_TIP
@@ -139,11 +141,13 @@ def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: flo
     try:
         male, female = PROFILES[profile](g, hm, hf, tip_radius)
     except CaseError as e:
-        if pressure_angle is None:
-            raise
-        # (an undercut names the circles: say what set them)
-        raise CaseError(f"pressure_angle_deg = {math.degrees(pressure_angle):.4g} (tip and "
-                        f"root circles of {tip_radius * 1e3:.4g} mm): {e}") from None
+        if pressure_angle is not None:
+            # (an undercut names the circles: say what set them)
+            raise CaseError(f"pressure_angle_deg = {math.degrees(pressure_angle):.4g} (tip "
+                            f"and root circles of {tip_radius * 1e3:.4g} mm): {e}") from None
+        if profile in RACKS and str(e).startswith(("undercut", "rack arc")):
+            raise CaseError(f"{e}; {remedy(profile, g, hm, hf, tip_radius, given)}") from None
+        raise
     return TwinScrewPair(g, male, female, profile)
 
 

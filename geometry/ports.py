@@ -71,6 +71,10 @@ HOLE_FRACTION = 0.01
 SECTION_SPACING = 1e-4
 #: Ages (rad) this close are one sample: the grid's angles carry rounding of ~1e-15.
 EPS_AGE = 1e-9
+#: Halvings of a section step that locate the planar section's birth and death
+#: (:func:`planar_life`): 1/4096 of a step, 6e-5 rad at 24 points per period on a 1-1
+#: pump, for 24 polygons-only section cuts (~0.2 s) on a machine with a transport phase.
+LIFE_BISECTIONS = 12
 
 
 @dataclass(frozen=True)
@@ -93,9 +97,12 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
     alive = np.nonzero(v > 0.0)[0]
     death = float(age[alive[-1] + 1]) if alive[-1] + 1 < len(age) else float(age[-1])
     # The transport plateau: from the section's death (it leaves the suction plate) to
-    # its birth reaching the discharge plate, ages on the table's nodes.
-    plateau = (machine.life_2d, machine.sweep.wrap)
-    transport = plateau[0] < plateau[1]
+    # its birth reaching the discharge plate, as ages of the table (from its first node).
+    transport = machine.life_2d < machine.sweep.wrap + 2.0 * cur.step  # (nodes: a bound)
+    if transport:
+        birth, death_2d = planar_life(machine)
+        plateau = (death_2d - float(cur.phi[0]), birth + machine.sweep.wrap - float(cur.phi[0]))
+        transport = plateau[0] < plateau[1]
     if suction_close is not None:
         sc = float(suction_close)
     else:
@@ -113,6 +120,33 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
                         f" discharge opens at {math.degrees(do):.1f} deg, the chamber dies at "
                         f"{math.degrees(death):.1f} deg")
     return PortTiming(sc, do, death)
+
+
+def planar_life(machine: SweptMachine) -> tuple[float, float]:
+    """(birth, death): where the chamber's planar section first and last holds fluid,
+    between the section table's nodes, each bisected LIFE_BISECTIONS times on whether
+    a section cut there holds any of it.  The zero nodes either side (``phi_i``,
+    ``phi_f``) bound the life only to a step, and a 1-1 pump's suction closed at
+    ``phi_f``, where its transport plateau began: with ideal ports a step late is a step
+    more open to suction (the involute pump's eta_v moved by 3.3e-3 from 24 to 192
+    points per period, and by 9e-5 once bisected)."""
+    sec = machine.section
+    live = np.nonzero(sec.area > 0.0)[0]
+
+    def edge(inside: float, outside: float) -> float:
+        for _ in range(LIFE_BISECTIONS):
+            mid = 0.5 * (inside + outside)
+            if any(len(q) >= 3 for q in chamber_section(machine, mid)):
+                inside = mid
+            else:
+                outside = mid
+        return 0.5 * (inside + outside)
+
+    first, last = int(live[0]), int(live[-1])
+    birth = edge(sec.psi[first], sec.psi[first - 1]) if first > 0 else float(sec.psi[0])
+    death = (edge(sec.psi[last], sec.psi[last + 1]) if last + 1 < len(sec.psi)
+             else float(sec.psi[-1]))
+    return birth, death
 
 
 def _volume_peak(machine: SweptMachine, imax: int) -> float:

@@ -222,3 +222,19 @@ def test_grooves_left_out_of_the_cut_are_booked_as_the_whole_cut_books_them(prof
             assert np.allclose(x.torque, y.torque, rtol=0.0, atol=1e-12 * scale)
             assert sorted((r, k) for r, k, _ in x.tips) == sorted((r, k) for r, k, _ in y.tips)
     assert covered >= 3 * len(scans(profile))  # (half the grooves, or more, left out)
+
+
+def test_the_chamber_lives_with_its_fluid_not_with_a_stray_seal():
+    """At 384 section points per period a contact on a film Clipper breaks into specks
+    is booked (section._lives) to a life four periods past the 4/6 pin-cycloid
+    chamber's death; that seal no longer extends the chamber's table (it ran 1,003
+    nodes, 4.1 rad, past the fluid): its life ends within a node of its last fluid, as
+    at 192 (sealing points keep it alive only next to its fluid)."""
+    from rotorflow.workflow.case import load_case
+
+    from .conftest import CASES
+
+    sec = load_case(CASES / "twin_screw_4_6.toml").pair.section(384)
+    h = sec.psi[1] - sec.psi[0]
+    last = sec.psi[np.nonzero(sec.area > 0.0)[0][-1]]
+    assert sec.phi_f - last < 3.5 * h

@@ -304,7 +304,8 @@ def _shared(x: Chain, y: Chain, n: float) -> float | None:
     best = max(min(x.hi, y.hi + s) - max(x.lo, y.lo + s) for s in (-n, 0.0, n))
     if best < 0.0:
         return None
-    return best / max(min(x.hi - x.lo, y.hi - y.lo), best, 1e-300)
+    shorter = min(x.hi - x.lo, y.hi - y.lo)
+    return 1.0 if best >= shorter else best / shorter  # (a point lies within: 1)
 
 
 def _bands(bands):

@@ -266,3 +266,43 @@ def test_the_involute_interlobe_line_does_not_depend_on_the_resolution():
     coarse, fine = machine("involute", 1, 1080.0, 24), machine("involute", 1, 1080.0, 96)
     here, there = interlobe(coarse), interlobe(fine, coarse.curves.phi)
     assert np.abs(here - there).max() < 1e-9 * there.max()
+
+
+@pytest.mark.parametrize("profile", ["circular", "involute"])
+def test_a_one_lobe_pairs_blow_holes_are_booked_where_its_sections_book_them(profile):
+    """Off the grid, a cut's own booking (blowhole.openings_of: the male and female
+    parts meeting at a cusp belong to different chambers) says where chamber 0 has
+    each blow-hole; the section table's Opening intervals must say the same, at 48 and
+    at 49 points per period alike.  A one-lobe rotor's one groove reaches both cusps,
+    so its tip crossing either cusp changes which chambers meet at both: before the
+    other cusp's crossings were slot ends, the intervals spanned whole slots of which
+    the chamber held the latter half (the vacuum pump's blow-hole integrals 53 % too
+    large), and at 49 (4 k + 1) the halves fell short of a majority and none was
+    booked."""
+    from rotorflow.geometry.twin_screw import section as S
+    from rotorflow.geometry.twin_screw.blowhole import openings_of
+
+    p = pair(profile, 1)
+    period, base = 2.0 * math.pi, -S._beta0(p)
+    for ppp in (PPP, PPP + 1):
+        sec = p.section(2 * ppp)
+        booked = {(o.name, o.offset): o.intervals for o in sec.openings}
+        assert len(booked) == 4, booked
+        ends = np.concatenate([iv.ravel() for iv in booked.values()])
+        for psi in np.linspace(sec.phi_i, sec.phi_f, 97)[1:-1]:
+            if np.min(np.abs(ends - psi)) < 1e-3:
+                continue  # (at a crossing itself)
+            q = int(np.floor((psi - base) / period + 1e-9))
+            parts = S._cut(p, float(psi - q * period))
+            qs = [S.chamber_index(p, x, float(psi - q * period), p.female_shift)
+                  for x in parts]
+            own = {(n, d) for c, n, d, w in openings_of(parts, qs) if c == q and w > 0.0}
+            table = {key for key, iv in booked.items()
+                     if np.any((iv[:, 0] < psi) & (psi < iv[:, 1]))}
+            assert own <= table, (ppp, psi, own, table)
+            assert {k for k in table if _width(sec, k, psi) > 1e-9} <= own, (ppp, psi)
+
+
+def _width(sec, key, psi):
+    (o,) = [o for o in sec.openings if (o.name, o.offset) == key]
+    return float(o.width(np.array([psi]))[0])

@@ -237,9 +237,20 @@ class WidthTable:
 
 def tip_crossings(pair, a: float, b: float, top: bool) -> np.ndarray:
     """Male angles in [a, b] where a tip of either rotor crosses the top (or bottom)
-    cusp."""
-    return np.sort(cusp_crossings(pair, a, b, {r: [pair.tip_angle(r)] for r in (MALE, FEMALE)},
-                                  (top,)))
+    cusp, and where a one-lobe rotor's tip crosses the other cusp: its one groove
+    reaches both cusps, so which chambers meet at this cusp changes there too.  (The
+    1-1 pumps' blow-holes were booked over whole slots between this cusp's crossings,
+    of which the chamber's own were the latter halves: their areas' integrals held half
+    a slot of the ray's width inside one chamber's groove, and at 4 k + 1 points per
+    period the halves' nodes fell one short of MAJORITY and no blow-hole was booked.)"""
+    out = cusp_crossings(pair, a, b, {r: [pair.tip_angle(r)] for r in (MALE, FEMALE)}, (top,))
+    g = pair.gearing
+    single = {r: [pair.tip_angle(r)] for r, n in ((MALE, g.lobes_male),
+                                                  (FEMALE, g.lobes_female)) if n == 1}
+    if single:
+        out = np.concatenate([out, cusp_crossings(pair, a, b, {MALE: [], FEMALE: [], **single},
+                                                  (not top,))])
+    return np.unique(out)
 
 
 def cusp_crossings(pair, a: float, b: float, angles: dict, tops) -> np.ndarray:

@@ -92,9 +92,10 @@ REFINE = ()
 #: from one's corners to the other's, which are different corners, spanned 112 mm2 of
 #: the lens that no section covers: the involute pump's discharge area erred by 8.1e-3
 #: of its largest value at 48 points per period.  A piece that splits or merges
-#: between samples shares 0.23 of the shorter piece or more (the shipped pairs, 24
-#: points per period), and the grazing pair's shared surface is a sliver of a step's
-#: travel.
+#: between samples shares 0.23 of the shorter piece or more (the shipped pairs, and
+#: 4/5, 5/6 and 5/7 pairs on the circular, line-circle and pin-cycloid racks, 24 points
+#: per period), and only there does one of the two have no other partner; the grazing
+#: pair's shared surface is a sliver of a step's travel.
 GRAZE = 0.1
 #: Rings of a section thinner than this on average (twice the area over the perimeter,
 #: per centre distance, plus what the family's polygons take off a film,

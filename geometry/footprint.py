@@ -84,18 +84,20 @@ PATH_T = np.linspace(0.0, 1.0, 7)[1:-1]
 #: them, 2.6e-4 with them, and they cost a section cut each).
 REFINE = ()
 #: Two pieces of one surface that share less than this fraction of the shorter one's
-#: profile parameters are not matched when each has a piece of its own at the other
-#: sample: they only graze.  Where the 1-1 pumps' contact crosses the cusp line at the
-#: pitch point, a piece below it at one sample and the piece above it at the next share
-#: the few hundredths of a degree of surface that crossed (0.039 of the shorter piece on
-#: the involute, 0.021 on the circular), and the band between them, closed along paths
-#: from one's corners to the other's, which are different corners, spanned 112 mm2 of
-#: the lens that no section covers: the involute pump's discharge area erred by 8.1e-3
-#: of its largest value at 48 points per period.  A piece that splits or merges
-#: between samples shares 0.23 of the shorter piece or more (the shipped pairs, and
-#: 4/5, 5/6 and 5/7 pairs on the circular, line-circle and pin-cycloid racks, 24 points
-#: per period), and only there does one of the two have no other partner; the grazing
-#: pair's shared surface is a sliver of a step's travel.
+#: profile parameters are not matched when each shares at least this much with another
+#: piece at the other sample: they only graze.  Where the 1-1 pumps' contact crosses
+#: the cusp line at the pitch point, a piece below it at one sample and the piece above
+#: it at the next share the few hundredths of a degree of surface that crossed (0.039
+#: and 0.006 of the shorter piece on the involute at 24 and 48 points per period, 0.021
+#: and 0.0014 on the circular), and the band between
+#: them, closed along paths from one's corners to the other's, which are different
+#: corners, spanned 112 mm2 of the lens that no section covers: the involute pump's
+#: discharge area erred by 8.1e-3 of its largest value at 48 points per period.  What
+#: keeps a real match is the condition on both pieces, not the share alone: a piece
+#: that splits or merges, or slides, has a side with no other partner, and may share
+#: as little as 0.0015 (the 4/6 pin-cycloid at 48); where both pieces have other
+#: partners the shipped pairs share 0.75 or more (the circular 4/6 at 24 and 96) or
+#: graze (the 1-1 pumps above; 24, 48 and 96 points per period measured).
 GRAZE = 0.1
 #: Rings of a section thinner than this on average (twice the area over the perimeter,
 #: per centre distance, plus what the family's polygons take off a film,
@@ -263,10 +265,11 @@ class Sweeper(Events):
         shared = [(i, j, _shared(x, y, self.periods[x.rotor]))
                   for i, x in enumerate(ca) for j, y in enumerate(cb) if x.rotor == y.rotor]
         shared = [(i, j, f) for i, j, f in shared if f is not None]
+        own_a = {i for i, _, f in shared if f >= GRAZE}
+        own_b = {j for _, j, f in shared if f >= GRAZE}
         for i, j, f in shared:
-            if f < GRAZE and sum(1 for k, _, _ in shared if k == i) > 1 and sum(
-                    1 for _, k, _ in shared if k == j) > 1:
-                continue  # (each has its own piece at the other sample: GRAZE)
+            if f < GRAZE and i in own_a and j in own_b:
+                continue  # (each has a piece of its own at the other sample: GRAZE)
             pairs.append((ca[i], cb[j]))
             used_a.add(i)
             used_b.add(j)

@@ -72,9 +72,14 @@ SECTION_SPACING = 1e-4
 #: Ages (rad) this close are one sample: the grid's angles carry rounding of ~1e-15.
 EPS_AGE = 1e-9
 #: Halvings of a section step that locate the planar section's birth and death
-#: (:func:`planar_life`): 1/4096 of a step, 6e-5 rad at 24 points per period on a 1-1
+#: (:func:`planar_life`): 1/4096 of a step, 3.2e-5 rad at 24 points per period on a 1-1
 #: pump, for 24 polygons-only section cuts (~0.2 s) on a machine with a transport phase.
 LIFE_BISECTIONS = 12
+#: How far the section table's zero nodes and a seal's nodes next to the fluid may
+#: carry the nodes' life past the fluid's, in curve steps (two section steps each): up
+#: to 3 section steps at one end measured (the 4/6 pin-cycloid at 384), so a plateau
+#: is looked for wherever the nodes' life is within this of the wrap.
+LIFE_OVERSHOOT = 4
 
 
 @dataclass(frozen=True)
@@ -98,7 +103,7 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
     death = float(age[alive[-1] + 1]) if alive[-1] + 1 < len(age) else float(age[-1])
     # The transport plateau: from the section's death (it leaves the suction plate) to
     # its birth reaching the discharge plate, as ages of the table (from its first node).
-    transport = machine.life_2d < machine.sweep.wrap + 2.0 * cur.step  # (nodes: a bound)
+    transport = machine.life_2d < machine.sweep.wrap + LIFE_OVERSHOOT * cur.step
     if transport:
         birth, death_2d = planar_life(machine)
         plateau = (death_2d - float(cur.phi[0]), birth + machine.sweep.wrap - float(cur.phi[0]))
@@ -132,6 +137,8 @@ def planar_life(machine: SweptMachine) -> tuple[float, float]:
     points per period, and by 9e-5 once bisected)."""
     sec = machine.section
     live = np.nonzero(sec.area > 0.0)[0]
+    if not len(live):  # (sealing points alone: nothing to bisect)
+        return float(sec.phi_i), float(sec.phi_f)
 
     def edge(inside: float, outside: float) -> float:
         for _ in range(LIFE_BISECTIONS):

@@ -397,3 +397,36 @@ def test_pieces_that_only_graze_across_the_pitch_point_bound_no_band():
     grid = P.open_areas(m, timing, ages)[1]
     fine = P.open_areas(m, timing, ages, steps=192)[1]
     assert np.abs(grid - fine).max() < 1e-4 * fine.max()
+
+
+def test_only_a_graze_between_pieces_matched_elsewhere_is_dropped():
+    """The rule behind the test above, on chains of one surface (profile parameters):
+    a graze (a share under GRAZE of the shorter piece) is dropped only when each of its
+    two pieces shares at least GRAZE with another; a piece whose overlaps are all
+    grazes keeps them, so that it is banded rather than taken for one that died."""
+    from types import SimpleNamespace
+
+    from rotorflow.geometry.footprint import Sweeper
+    from rotorflow.geometry.surfaces import Chain
+
+    def chain(lo, hi):
+        return Chain(0, np.array([[lo, 0.0], [hi, 0.0]]), lo, hi, 0)
+
+    surfaces = SimpleNamespace(rotors=[(None, 1.0, None, None, None, 100.0, 0.0)],
+                               move=lambda p, r, h: p)
+    sweeper = SimpleNamespace(periods=[100.0], surfaces=surfaces)
+
+    def matched(ca, cb):
+        pairs, born, dying = Sweeper._match(sweeper, ca, cb, 0.01)
+        assert not born and not dying
+        return {((x.lo, x.hi), (y.lo, y.hi)) for x, y in pairs}
+
+    # below / above the pitch point: (0, 4) -> (0, 3.9) and (4.1, 8) -> (3.98, 8); the
+    # first piece and the second's successor share 0.02 / 4: a graze, both partnered
+    a, b = [chain(0.0, 4.0), chain(4.1, 8.0)], [chain(0.0, 3.9), chain(3.98, 8.0)]
+    assert matched(a, b) == {((0.0, 4.0), (0.0, 3.9)), ((4.1, 8.0), (3.98, 8.0))}
+    # a piece whose only overlaps are grazes keeps both
+    a = [chain(0.0, 4.9), chain(5.0, 10.0), chain(10.1, 15.0)]
+    b = [chain(0.0, 5.3), chain(9.7, 15.0)]
+    assert ((5.0, 10.0), (0.0, 5.3)) in matched(a, b)
+    assert ((5.0, 10.0), (9.7, 15.0)) in matched(a, b)

@@ -241,8 +241,8 @@ def _assemble(pair, psi0, ppp, nodes) -> SectionChamber:
     # Only next to it: a contact on a film Clipper broke into specks was booked to a
     # life four periods beyond the chamber's death (the 4/6 pin-cycloid at 384 section
     # points per period), and the chamber's table ran on 1,003 nodes past its death.
-    live = sorted(k for k, v in nodes.items() if v["area"] > 0.0)
     sealed = {k for k, v in nodes.items() if v["seals"]}
+    live = sorted(k for k, v in nodes.items() if v["area"] > 0.0) or sorted(sealed)
     first, last = live[0], live[-1]
     while first - 1 in sealed:
         first -= 1

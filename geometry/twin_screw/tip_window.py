@@ -85,9 +85,10 @@ def remedy(profile: str, gearing: Gearing, male_addendum: float, female_addendum
     if window is None:
         return (f"no tip_radius_mm gives a {profile} rack without undercut on these "
                 f"diameters and centre distance{which}: change them")
-    # rounded inwards, to 0.01 mm where the window is wide enough
-    lo, hi = math.ceil(window[0] * 1e5) / 100.0, math.floor(window[1] * 1e5) / 100.0
-    if not lo < hi:
-        lo, hi = window[0] * 1e3, window[1] * 1e3
-    return (f"tip_radius_mm from {lo:.6g} to {hi:.6g} gives a {profile} rack without "
+    # rounded inwards, to 0.01 mm where the window is wide enough, else to 1e-6 mm
+    for unit in (1e5, 1e9):
+        lo, hi = math.ceil(window[0] * unit) / unit * 1e3, math.floor(window[1] * unit) / unit * 1e3
+        if lo < hi:
+            break
+    return (f"tip_radius_mm from {lo:.10g} to {hi:.10g} gives a {profile} rack without "
             f"undercut on these diameters{which}")

@@ -26,7 +26,8 @@ from .profiles import undercut_free_pair
 RACKS = {"circular": symmetric_circular_rack, "line-circle": asymmetric_rack}
 #: Radii tried across (0, the largest the circular rack admits): the 5/6 window above
 #: is 3.4 % of that range, 3 samples (0.27 s on the error's path; 192 samples move its
-#: edges by 1e-10 m).
+#: edges by 1e-10 m).  A window narrower than their spacing (1 % of the range) can be
+#: missed, and "none" said of it.
 SAMPLES = 96
 #: Bisection steps refining each edge (the range over 2^20: ~2e-8 m at C = 80 mm).
 REFINE = 20

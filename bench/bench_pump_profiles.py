@@ -28,7 +28,11 @@ every resolution now), trochoidal 1.0e-5 / 3.0e-7 / 8.2e-9 (fifth order; it was
 joints with the line of centres were located, the crossing of the cusp line sought
 over lost nodes and a corner contact's rate taken with its rotor:
 tests/test_twin_screw_trochoidal_lines.py checks both lines against closed forms).
-The involute with 10 mm circles jumps by 0.3 % between 48 and 96 (cause not found).
+The involute with 10 mm circles jumps by 0.3 % between 48 and 96 (located 2026-11-30,
+not fixed: its third interlobe contact lives 0.082 rad at a time, at most one section
+node at 24 and 48 points per period, and its line comes out 0.29 mm long there over
+every angle where it is whole; 7.9e-6 at 96; its track's cuts are the same at every
+resolution, so the line's sweep over a one-node run is what errs).
 Rerun 2026-11-30 (session 36, 42 s, 49 added): the same figures at 24 / 48 / 96; at 49
 V_max within 5e-8, blow-hole 9e-16, tip lines 8.7e-9, interlobe 3.6e-8 (circular),
 3.1e-10 (involute), 4.5e-8 (trochoidal); the blow-holes' integrals within 7.7e-9 at

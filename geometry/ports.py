@@ -53,6 +53,7 @@ import numpy as np
 
 from rotorflow.errors import CaseError
 
+from . import scalar
 from .machine import SweptMachine
 
 #: The discharge ports a case may ask for ([operating] discharge_port): the axial port on
@@ -141,13 +142,9 @@ def planar_life(machine: SweptMachine) -> tuple[float, float]:
         return float(sec.phi_i), float(sec.phi_f)
 
     def edge(inside: float, outside: float) -> float:
-        for _ in range(LIFE_BISECTIONS):
-            mid = 0.5 * (inside + outside)
-            if any(len(q) >= 3 for q in chamber_section(machine, mid)):
-                inside = mid
-            else:
-                outside = mid
-        return 0.5 * (inside + outside)
+        return 0.5 * sum(scalar.edge(
+            lambda psi: any(len(q) >= 3 for q in chamber_section(machine, psi)),
+            inside, outside, LIFE_BISECTIONS))
 
     first, last = int(live[0]), int(live[-1])
     birth = edge(sec.psi[first], sec.psi[first - 1]) if first > 0 else float(sec.psi[0])

@@ -70,6 +70,21 @@ def root(f: Callable[[float], float], a: float, b: float, xtol: float = 1e-14) -
     return best[1]  # (the Illinois halving scales the kept end's value: not comparable)
 
 
+def edge(holds: Callable[[float], bool], inside: float, outside: float,
+         steps: int) -> tuple[float, float]:
+    """(inside, outside): the bracket of where ``holds`` stops holding, halved ``steps``
+    times from ``inside`` (where it holds) and ``outside`` (where it does not).  For a
+    predicate with no value to interpolate (a section that holds fluid, a rack that
+    generates no undercut)."""
+    for _ in range(steps):
+        mid = 0.5 * (inside + outside)
+        if holds(mid):
+            inside = mid
+        else:
+            outside = mid
+    return inside, outside
+
+
 def minimum(f: Callable[[float], float], lo: float, hi: float,
             xtol: float = 1e-10) -> tuple[float, float]:
     """(x, f(x)) at a local minimum of ``f`` inside [lo, hi], by golden-section search.

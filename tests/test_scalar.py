@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from rotorflow.geometry.scalar import minimum, periodic_peak, root
+from rotorflow.geometry.scalar import edge, minimum, periodic_peak, root
 
 
 @pytest.mark.parametrize("f, a, b, exact", [
@@ -119,3 +119,12 @@ def test_hermite_peak_and_fall_converge_on_a_smooth_curve():
     assert errors[-1].max() < 1e-6  # the largest sample: 0.0125 off
     orders = np.log2(errors[0] / errors[1]) / 3.0
     assert np.all(orders > 3.0), orders
+
+
+def test_edge_brackets_where_a_predicate_stops_holding():
+    """x * x < 2 holds up to sqrt 2: 40 halvings of [0, 3] bracket it within 3 / 2^40,
+    from either side (inside above or below outside)."""
+    lo, hi = edge(lambda x: x * x < 2.0, 0.0, 3.0, 40)
+    assert lo < math.sqrt(2.0) <= hi and hi - lo == pytest.approx(3.0 / 2 ** 40)
+    hi, lo = edge(lambda x: x * x > 2.0, 3.0, 0.0, 40)
+    assert lo <= math.sqrt(2.0) < hi and hi - lo == pytest.approx(3.0 / 2 ** 40)

@@ -17,6 +17,7 @@ import math
 
 from rotorflow.errors import CaseError
 
+from .. import scalar
 from .asymmetric import asymmetric_rack
 from .circular import symmetric_circular_rack
 from .meshing import Gearing
@@ -63,14 +64,9 @@ def undercut_free_radii(profile: str, gearing: Gearing, male_addendum: float,
         return None
     i, j = max(runs, key=lambda run: run[1] - run[0])
 
-    def edge(good, bad):
-        for _ in range(REFINE):
-            mid = 0.5 * (good + bad)
-            if clean(profile, gearing, male_addendum, female_addendum, mid):
-                good = mid
-            else:
-                bad = mid
-        return good
+    def edge(good, bad):  # (the end that generates cleanly: the window holds it)
+        return scalar.edge(lambda r: clean(profile, gearing, male_addendum,
+                                           female_addendum, r), good, bad, REFINE)[0]
 
     lo = edge(radii[i], radii[i - 1] if i > 0 else 0.0)
     hi = edge(radii[j], radii[j + 1] if j + 1 < len(radii) else top)

@@ -92,7 +92,7 @@ def table_origin(case) -> float:
     machine age ``a + table_origin``."""
     from rotorflow.geometry.summary import build_machine
 
-    return float(build_machine(case).curves.phi[0])
+    return float(build_machine(case).planar_life[0])
 
 
 def frozen_models(case, table, phi: float, models, correlation: Path | None = None,

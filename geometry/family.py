@@ -72,6 +72,10 @@ class RotorPair(ABC):
     #: Whether the casing can have a radial discharge port ([operating] discharge_port,
     #: :meth:`radial_port`).
     radial_ports = False
+    #: Whether the section table's ``phi_i`` and ``phi_f`` are the chamber's planar birth
+    #: and death exactly (else they are its zero nodes either side, and the life is
+    #: located between them: :func:`.ports.planar_life`).
+    life_on_nodes = True
 
     @property
     @abstractmethod

@@ -199,6 +199,22 @@ class SweptMachine:
         return ChamberLoads(phi=sec.psi[0] + step * np.arange(n), volume=volume,
                             force=force, torque=torque, step=step)
 
+    @cached_property
+    def planar_life(self) -> tuple[float, float]:
+        """(birth, death): the reference-rotor angles at which the chamber's planar
+        section first and last holds fluid (:func:`.ports.planar_life`)."""
+        from .ports import planar_life
+
+        return planar_life(self)
+
+    @property
+    def birth_age(self) -> float:
+        """The chamber's birth as an age of its curves.  They start at a section-table
+        node at or before it, which moves with the resolution (by up to a step: 3.75 deg
+        at 24 points per period on a 4/6 pair); every angle a user gives or reads (port
+        timing, figures, the chamber table's) is counted from the birth itself."""
+        return self.planar_life[0] - float(self.curves.phi[0])
+
     @property
     def period(self) -> float:
         return self.pair.period
@@ -210,7 +226,8 @@ class SweptMachine:
     @property
     def wrap_bar(self) -> float:
         """Normalised wrap angle, seed 000 Eq. 8."""
-        return self.sweep.wrap / self.life_2d
+        birth, death = self.planar_life
+        return self.sweep.wrap / (death - birth)
 
     @property
     def pitch_length(self) -> float | None:

@@ -85,7 +85,8 @@ LIFE_OVERSHOOT = 4
 
 @dataclass(frozen=True)
 class PortTiming:
-    """Outer-rotor angles since the chamber's birth (radians)."""
+    """Ages of the chamber's curves (radians of the reference rotor from their first
+    node, :attr:`.machine.SweptMachine.birth_age` before the birth)."""
 
     suction_close: float
     discharge_open: float
@@ -96,6 +97,8 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
                 suction_close: float | None = None,
                 discharge_open: float | None = None,
                 early_opening: float = 0.0) -> PortTiming:
+    """The port timing as ages of the curves; ``suction_close`` and ``discharge_open``,
+    where given, are angles since the chamber's birth (the case's)."""
     cur = machine.curves
     age = cur.phi - cur.phi[0]
     v = cur.volume
@@ -106,11 +109,12 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
     # its birth reaching the discharge plate, as ages of the table (from its first node).
     transport = machine.life_2d < machine.sweep.wrap + LIFE_OVERSHOOT * cur.step
     if transport:
-        birth, death_2d = planar_life(machine)
+        birth, death_2d = machine.planar_life
         plateau = (death_2d - float(cur.phi[0]), birth + machine.sweep.wrap - float(cur.phi[0]))
         transport = plateau[0] < plateau[1]
+    b = machine.birth_age
     if suction_close is not None:
-        sc = float(suction_close)
+        sc = float(suction_close) + b
     else:
         sc = plateau[0] if transport else _volume_peak(machine, imax) - float(cur.phi[0])
     if discharge_open is None and volume_ratio == 1.0:
@@ -118,13 +122,14 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
     elif discharge_open is None:
         do = _volume_fall(machine, imax, volume_ratio) - float(cur.phi[0]) - early_opening
     else:
-        do = float(discharge_open)
+        do = float(discharge_open) + b
     # Without internal compression and without a transport phase the suction closes and
     # the discharge opens at one angle, the volume maximum.
-    if not (0.0 < sc < do < death or (0.0 < sc == do < death and volume_ratio == 1.0)):
-        raise CaseError(f"port timing out of order: suction closes at {math.degrees(sc):.1f} deg,"
-                        f" discharge opens at {math.degrees(do):.1f} deg, the chamber dies at "
-                        f"{math.degrees(death):.1f} deg")
+    if not (b < sc < do < death or (b < sc == do < death and volume_ratio == 1.0)):
+        raise CaseError(f"port timing out of order: suction closes at "
+                        f"{math.degrees(sc - b):.1f} deg, discharge opens at "
+                        f"{math.degrees(do - b):.1f} deg, the chamber dies at "
+                        f"{math.degrees(death - b):.1f} deg (since its birth)")
     return PortTiming(sc, do, death)
 
 
@@ -138,7 +143,7 @@ def planar_life(machine: SweptMachine) -> tuple[float, float]:
     points per period, and by 9e-5 once bisected)."""
     sec = machine.section
     live = np.nonzero(sec.area > 0.0)[0]
-    if not len(live):  # (sealing points alone: nothing to bisect)
+    if machine.pair.life_on_nodes or not len(live):  # (nothing to bisect)
         return float(sec.phi_i), float(sec.phi_f)
 
     def edge(inside: float, outside: float) -> float:

@@ -73,14 +73,17 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
     else:
         suction_close = phi[np.nonzero(cur.area_lp > 0.0)[0][-1]]
         discharge_open = phi[np.nonzero(cur.area_hp > 0.0)[0][0]]
+    # (angles since the birth itself, not the grid's first node: :attr:`.SweptMachine.
+    # birth_age`)
+    birth, death = m.planar_life
     wraps = {f"wrap_{r.name}_deg": _deg(m.sweep.wrap * abs(r.speed_ratio)) for r in pair.rotors}
     return {
         "case": case.name,
         "machine": pair.family,
         **pair.figures(),
         **pair.swept_figures(m),
-        "phi_i_deg": _deg(sec.phi_i),
-        "phi_f_deg": _deg(sec.phi_f),
+        "phi_i_deg": _deg(birth),
+        "phi_f_deg": _deg(death),
         **wraps,
         "wrap_bar": m.wrap_bar,
         "pitch_over_length": None if m.pitch_length is None else m.pitch_length / m.sweep.length,
@@ -94,11 +97,11 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
         "chamber_volume_max_m3": m.volume_max,
         "swept_volume_m3": m.swept_volume,
         # between the nodes, as the suction port closes there (:func:`.ports.port_timing`)
-        "angle_volume_max_deg": _deg(_volume_peak(m, k_max) - phi[0]),
-        "angle_suction_close_deg": _deg(suction_close - phi[0]),
-        "angle_discharge_open_deg": _deg(discharge_open - phi[0]),
+        "angle_volume_max_deg": _deg(_volume_peak(m, k_max) - birth),
+        "angle_suction_close_deg": _deg(suction_close - birth),
+        "angle_discharge_open_deg": _deg(discharge_open - birth),
         "volume_suction_close_m3": float(m.volume_at(suction_close)[0]),
-        "chamber_life_deg": _deg(phi[-1] - phi[0]),
+        "chamber_life_deg": _deg(death - birth + m.sweep.wrap),
         "volume_ratio": case.volume_ratio,
         **radial,
     }
@@ -130,7 +133,7 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
         timing = _timing_scalars(case, m)
     paths = pair.leakage_paths(far, tracks, openings)
     return ChamberTable(
-        angle_rad=cur.phi - cur.phi[0],
+        angle_rad=cur.phi - m.planar_life[0],
         volume_m3=cur.volume,
         dVdangle_m3_rad=cur.dvolume,
         area_lp_m2=area_lp,
@@ -186,7 +189,8 @@ def _timing_scalars(case, m: SweptMachine) -> dict[str, float]:
     (:func:`rotorflow.quasi1d.chamber.prepare`): one rule, :func:`.ports.port_timing`."""
     t = case_port_timing(case, m)
     op = case.raw.get("operating", {})
-    return {"suction_close_rad": t.suction_close, "discharge_open_rad": t.discharge_open,
+    b = m.birth_age  # (the table's angles are counted from the birth)
+    return {"suction_close_rad": t.suction_close - b, "discharge_open_rad": t.discharge_open - b,
             "volume_ratio": float(case.volume_ratio),
             "early_opening_rad": math.radians(float(op.get("discharge_early_opening_deg", 0.0)))}
 

@@ -1,10 +1,11 @@
 """The chamber table: what the geometry hands to the quasi-1D model.
 
 One working chamber is followed from its birth to its death against the outer-rotor
-angle ``angle_rad`` (0 at birth).  Every other chamber of the machine is the same
-chamber shifted by whole lobe periods ``2*pi/lobes_outer``: the chamber one period
-older is the *next* (leading) neighbour, one period younger the *previous* (trailing)
-one.  Everything is SI.
+angle ``angle_rad`` (0 at birth; a table whose grid cannot start on the birth, the
+twin screw's, starts at the node before it, a small negative angle of volume 0).
+Every other chamber of the machine is the same chamber shifted by whole lobe periods
+``2*pi/lobes_outer``: the chamber one period older is the *next* (leading) neighbour,
+one period younger the *previous* (trailing) one.  Everything is SI.
 
 CSV columns (one row per angle, uniform spacing):
 

@@ -65,8 +65,9 @@ def test_ports_reuse_the_table_cuts(built):
     # between the table's nodes), the discharge face's nodes where its area has a
     # kink (shifted by the wrap off the grid: port_areas.KINK_TOL) and the samples the
     # sweeps cut at a corner's turn (footprint_events.Events._turns, a few per sweep)
-    # cost a section of their own: the open areas' sweeps and the shapes' samples lie
-    # on the section table's grid.
+    # cost a section of their own, and the bisections of the chamber's birth and death
+    # (ports.planar_life, the origin of the angles a case gives and reads): the open
+    # areas' sweeps and the shapes' samples lie on the section table's grid.
     from rotorflow.geometry.twin_screw.section import RESIDUE_TOL, _beta0
 
     case, m, *_ , table_cuts, _, turns = built
@@ -78,7 +79,7 @@ def test_ports_reuse_the_table_cuts(built):
 
     shifted = residues(m.curves.phi - m.sweep.wrap)  # the discharge face's planar angles
     extra = set(case.pair.cut_memo) - table_cuts
-    assert len(extra - shifted - residues(turns)) == 2
+    assert len(extra - shifted - residues(turns)) == 2 + 2 * P.LIFE_BISECTIONS
     assert 0 < len(turns) <= 2 * PPP
     assert 0 < len(extra & shifted) <= PPP  # one lobe period of residues at most
 

@@ -293,7 +293,8 @@ def test_the_tables_hold_the_ports_asked_for(tables):
     # opening), and it is no sliver: its largest open area is of the axial one's order
     # (seed 004 sums them; here 330 against 823 mm2).
     radial_area, axial_area = (both.columns[f"area_hp_{k}_m2"] for k in ("radial", "axial"))
-    opening = port_timing(m, VOLUME_RATIO, early_opening=EARLY).discharge_open
+    # (an age of the curves; the table counts from the birth, birth_age later)
+    opening = port_timing(m, VOLUME_RATIO, early_opening=EARLY).discharge_open - m.birth_age
     assert np.all(radial_area[both.angle_rad < opening] == 0.0)
     assert radial_area[np.searchsorted(both.angle_rad, opening)] > 0.0
     assert radial_area.max() > 0.3 * axial_area.max()

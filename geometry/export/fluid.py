@@ -121,7 +121,8 @@ def _ports(asm: Assembly, solid, entry: dict):
             entry[f"{name}_port_area_m2"] = float(region.area())
             port_volume += float(region.area()) * depth
         solid = manifold3d.Manifold.batch_boolean([solid, *prisms], manifold3d.OpType.Add)
-        entry["port_timing_rad"] = {"suction_close": timing.suction_close,
-                                    "discharge_open": timing.discharge_open,
-                                    "death": timing.death}
+        b = m.birth_age  # (since the chamber's birth, as the case gives them)
+        entry["port_timing_rad"] = {"suction_close": timing.suction_close - b,
+                                    "discharge_open": timing.discharge_open - b,
+                                    "death": timing.death - b}
     return solid, port_volume

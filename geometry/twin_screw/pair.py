@@ -48,6 +48,9 @@ class TwinScrewPair(ContactSearch, RotorPair):
     #: The table's port areas are the face sections inside the ports (summary.py).
     port_areas = True
     radial_ports = True
+    #: The section table runs from the zero node before the birth to the one after the
+    #: death (found by cutting sections on its grid).
+    life_on_nodes = False
 
     gearing: Gearing
     male: TwinProfile

@@ -169,13 +169,14 @@ class TabulatedFluid:
 
         m = np.atleast_1d(m)
         U = np.atleast_1d(U)
+        V = np.broadcast_to(V, m.shape)  # (a liquid's share differs per state)
         m2 = np.empty_like(m)
         for i in range(m.size):
-            mi, Ui = m.flat[i], U.flat[i]
+            mi, Ui, Vi = m.flat[i], U.flat[i], float(V.flat[i])
 
-            def f(mm, mi=mi, Ui=Ui):
+            def f(mm, mi=mi, Ui=Ui, Vi=Vi):
                 uu = (Ui + (mm - mi) * h_in) / mm
-                return self._upd("DmassUmass_INPUTS", mm / V, uu).p() - p2
+                return self._upd("DmassUmass_INPUTS", mm / Vi, uu).p() - p2
 
             hi = mi * 2.0
             while f(hi) < 0:

@@ -83,6 +83,7 @@ def _equalise(model, k, V, y, acc):
     n, fl, pd = model.n, model.fluid, model.dis.p
     m = y[:, k].copy()
     U = y[:, n + k].copy()
+    V = np.broadcast_to(V, m.shape)  # (per state where a liquid holds some of it)
     rho = m / V
     u = U / m
     p, _, _ = fl.props(rho, u)
@@ -92,10 +93,10 @@ def _equalise(model, k, V, y, acc):
     under = p < pd * (1 - 1e-12)
     if np.any(over):
         r2, u2 = fl.isentropic(rho[over], u[over], pd)
-        m2[over] = r2 * V
+        m2[over] = r2 * V[over]
         U2[over] = m2[over] * u2
     if np.any(under):
-        m2[under], U2[under] = fl.fill(m[under], U[under], V, model.dis.h, pd)
+        m2[under], U2[under] = fl.fill(m[under], U[under], V[under], model.dis.h, pd)
     y[:, k] = m2
     y[:, n + k] = U2
     acc[:, ACC_M_DIS] += m - m2

@@ -58,7 +58,24 @@ def plenums(fluid, op: Operating) -> tuple[Plenum, Plenum]:
     if ratio > 0:
         Td = flooded_discharge_T(fluid, suc, op, ratio)
         dis_h = {}
+        dew = _dew(fluid, op)
+        if dew is not None and Td <= dew:
+            # Oil at or below the condensing temperature cools the mixture to below the
+            # dew point: the gas over it is saturated vapour (the rest condenses into the
+            # oil), not the subcooled liquid (p, T) would name, 1150-1250 kg/m3 for
+            # R134a, which flowed back into the chambers and stalled the cycle.
+            Td, dis_h = dew, {"q": 1.0}
     return suc, plenum(op.p_discharge_Pa, Td, **dis_h)
+
+
+def _dew(fluid, op: Operating) -> float | None:
+    """The dew temperature at the discharge pressure of a CoolProp fluid (None: no dome
+    there, or a gas law)."""
+    if not op.fluid.startswith("CoolProp::"):
+        return None
+    from .coolprop_table import dew_temperature
+
+    return dew_temperature(fluid.name, op.p_discharge_Pa)
 
 
 def liquid_ratio(op: Operating, suc: Plenum) -> float:

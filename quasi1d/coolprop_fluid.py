@@ -257,9 +257,10 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
                 f"T_suction_K = {Ts:g} is not the saturation temperature of {name} at "
                 f"{ps / 1e5:g} bar ({Tsat:.2f} K) that suction_quality = {qs:g} implies")
     else:
+        _refuse_outside_the_equation(name, ps, pd, Ts)
         Tsat = dew_temperature(name, ps)
         if Tsat is not None and Ts <= Tsat + SATURATION_T_TOLERANCE_K:
-            state = "subcooled liquid" if Ts < Tsat - SATURATION_T_TOLERANCE_K else "saturated"
+            state = _below_dew(name, ps, Ts, Tsat)
             raise CaseError(
                 f"suction of {name} at {ps / 1e5:g} bar and T_suction_K = {Ts:g} is {state}: "
                 f"the saturation temperature there is {Tsat:.2f} K; a dry suction needs "
@@ -278,6 +279,34 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
                         f"suction state (its two-phase flash fails for pseudo-pure blends): "
                         f"give a superheated suction")
     return fluid
+
+
+def _refuse_outside_the_equation(name, ps, pd, Ts) -> None:
+    """A suction temperature or a pressure beyond the range of CoolProp's equation of
+    state for ``name`` is refused (CoolProp extrapolates there without a word)."""
+    import CoolProp.CoolProp as CP
+
+    st = CP.AbstractState("HEOS", name)
+    if Ts > st.Tmax():
+        raise CaseError(f"T_suction_K = {Ts:g} is above the range of CoolProp's equation of "
+                        f"state for {name} ({st.Tmax():.2f} K)")
+    if max(ps, pd) > st.pmax():
+        raise CaseError(f"a pressure of {max(ps, pd) / 1e5:g} bar is above the range of "
+                        f"CoolProp's equation of state for {name} ({st.pmax() / 1e5:g} bar)")
+
+
+def _below_dew(name, p, T, T_dew) -> str:
+    """What a state at or below the dew temperature is: saturated, inside a blend's
+    glide (between its bubble and dew points) or subcooled liquid."""
+    import CoolProp.CoolProp as CP
+
+    if T >= T_dew - SATURATION_T_TOLERANCE_K:
+        return "saturated"
+    st = CP.AbstractState("HEOS", name)
+    st.update(CP.PQ_INPUTS, p, 0.0)
+    if T > st.T() + SATURATION_T_TOLERANCE_K:
+        return f"inside its glide (bubble point {st.T():.2f} K)"
+    return "subcooled liquid"
 
 
 # A wet suction's T_suction_K must be the saturation temperature at p_suction within this:

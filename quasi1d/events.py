@@ -112,6 +112,7 @@ def initial_state(model) -> np.ndarray:
     # p ~ rho^kappa would guess liquid-dense states the fluid has not got.  A guess only
     # has to be a state; 1 (isothermal) is one for a gas or a wet mixture.
     kap = max(model.suc.kappa, 1.0)
+    _refuse_wet_lock(model)
     beta = op.gas_volume_fraction if model.inv_rho_liquid else 1.0
     m_trap = beta * model.suc.rho * geo.v_trapped  # the gas trapped
     for k in range(1, n):
@@ -141,12 +142,38 @@ def initial_state(model) -> np.ndarray:
             p = model.dis.p
             rho = model.suc.rho * (p / model.suc.p) ** (1.0 / kap)
         w = (model.suc.w,) if model.vapour else ()
-        u = fl.u_from_rho_p(rho, p, *w)
+        try:
+            u = fl.u_from_rho_p(rho, p, *w)
+        except ValueError:
+            # (a state the fluid has not got, e.g. R134a squeezed to 800 bar at the
+            # isothermal guess's density: the flash cannot bracket it)
+            rho, u = (model.dis.rho, model.dis.u) if age >= geo.discharge_open else \
+                (rho, model.suc.u)
         y[k] = rho * Vg
         y[n + k] = rho * Vg * u
         if model.vapour:
             y[humid.BLOCK * n + k] = rho * Vg * model.suc.w
     return y
+
+
+def _refuse_wet_lock(model) -> None:
+    """A wet suction whose liquid alone needs more room than the chamber has left when
+    its discharge opens locks it: refused.  (The liquid, compressed, hardly shrinks and
+    evaporates only as the vapour heats it; the model ran such points to pressures of
+    hundreds of bar read off the property table's liquid side beyond its range, and
+    called them converged.)"""
+    q = model.op.suction_quality
+    if q is None or q >= 1.0:
+        return
+    geo, suc = model.geo, model.suc
+    rho_liquid = model.fluid.state_pT(suc.p, suc.T, q=0.0)[0]
+    share = (1.0 - q) * suc.rho / rho_liquid
+    room = float(geo.volume(geo.discharge_open)) / geo.v_trapped
+    if share >= room:
+        raise CaseError(f"hydraulic lock: the wet suction's liquid (suction_quality {q:g}) "
+                        f"fills {share:.1%} of the trapped volume, more than the {room:.1%} "
+                        f"left when the discharge opens; raise suction_quality or lower "
+                        f"volume_ratio")
 
 
 def shift(model, y_end: np.ndarray) -> np.ndarray:

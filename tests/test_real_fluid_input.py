@@ -97,3 +97,41 @@ def test_wet_suction_of_a_pseudo_pure_blend_is_refused(tmp_path):
     line = _refused(tmp_path, text.replace(
         "T_suction_K = 285", f"T_suction_K = {Tsat:.2f}\nsuction_quality = 0.97"))
     assert "R410A" in line and "superheated" in line, line
+
+
+@pytest.mark.parametrize("name, words", [
+    ("CoolProp::", ["unknown fluid"]),  # (CoolProp lists an empty alias: it passed)
+    ("CoolProp::R32&R125", ["mixture", "CoolProp::R410A"]),
+    ("CoolProp::R407C.mix", ["mixture", "pseudo-pure"]),
+    ("CoolProp::R134", ["unknown fluid", "did you mean CoolProp::R134a"]),
+])
+def test_fluid_names_that_are_no_fluid_are_refused_with_a_remedy(tmp_path, name, words):
+    line = _refused(tmp_path, _case('fluid = "CoolProp::R134a"', f'fluid = "{name}"'))
+    assert all(w in line for w in words), line
+
+
+def test_a_suction_beyond_the_equation_of_state_is_refused(tmp_path):
+    # CoolProp's R134a equation holds to 455 K; above it CoolProp extrapolates silently
+    tmax = CP.AbstractState("HEOS", "R134a").Tmax()
+    line = _refused(tmp_path, _case("T_suction_K = 285", f"T_suction_K = {tmax + 15:g}"))
+    assert "T_suction_K" in line and f"{tmax:.2f} K" in line, line
+
+
+def test_a_blends_suction_inside_its_glide_is_named_so(tmp_path):
+    # R407C at 4.6 bar: bubble point 266.9 K, dew point 273.2 K; 271 K lies in the glide,
+    # which the message called subcooled liquid
+    text = _case('fluid = "CoolProp::R134a"', 'fluid = "CoolProp::R407C"').replace(
+        "p_suction_bar = 3.0", "p_suction_bar = 4.6")
+    line = _refused(tmp_path, text.replace("T_suction_K = 285", "T_suction_K = 271"))
+    assert "glide" in line and "subcooled" not in line, line
+
+
+def test_a_wet_suction_whose_liquid_cannot_fit_is_refused_as_a_hydraulic_lock(tmp_path):
+    # Quality 0.01 at 3 bar: the liquid is 53 % of the suction volume (CoolProp's
+    # saturated densities), the chamber keeps 1 / 2.7 = 37 % when the discharge opens.
+    # (It was a 31-line traceback from the chambers' starting guess.)
+    rho_l, rho_v = (CP.PropsSI("Dmass", "P", 3e5, "Q", q, "R134a") for q in (0.0, 1.0))
+    share = 0.99 / rho_l / (0.99 / rho_l + 0.01 / rho_v)
+    line = _refused(tmp_path, _case("T_suction_K = 285",
+                                    f"T_suction_K = {TSAT_3BAR:.2f}\nsuction_quality = 0.01"))
+    assert "hydraulic lock" in line and f"{share:.1%}" in line, line

@@ -99,6 +99,13 @@ def cmd_simulate(args) -> int:
     else:
         for key, value in figures.items():
             print(f"{key:<32} {value:.6g}" if isinstance(value, float) else f"{key:<32} {value}")
+    if figures.get("warning"):
+        print(f"rotorflow: warning: {figures['warning']}", file=sys.stderr)
+    if not figures.get("converged", True):
+        # (figures of a cycle that did not settle are no result: as `map` counts them)
+        print(f"rotorflow: the cycle did not converge: {figures.get('message', '')}",
+              file=sys.stderr)
+        return 1
     return 0
 
 

@@ -82,6 +82,9 @@ def headline_rows(s: dict) -> list[Row]:
     if _num(s.get("discharge_mixture_temperature_K")) is not None:
         rows.append(_temperature("Discharge temperature, gas and oil mixed",
                                  s["discharge_mixture_temperature_K"], "", ""))
+    if _num(s.get("discharge_quality")) is not None and s["discharge_quality"] < 1.0:
+        rows.append(Row("Discharge vapour quality", _scaled(s["discharge_quality"], 100.0),
+                        "%", "the delivered refrigerant is wet"))
     return rows
 
 

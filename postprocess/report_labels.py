@@ -115,6 +115,8 @@ QUASI1D = {
     "isothermal_efficiency": ("Isothermal efficiency, indicated", "fraction"),
     "discharge_temperature_K": ("Discharge temperature of the gas", "K"),
     "discharge_mixture_temperature_K": ("Discharge temperature, gas and oil mixed", "K"),
+    "discharge_quality": ("Vapour mass fraction of the delivered refrigerant", "fraction"),
+    "warning": ("Warning", ""),
     "heat_to_gas_W": ("Heat to the gas", "W"),
     "oil_flow_kg_s": ("Oil flow delivered", "kg/s"),
     "evaporated_kg_s": ("Liquid evaporated into the gas, net (negative: condensed)", "kg/s"),

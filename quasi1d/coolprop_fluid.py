@@ -153,6 +153,19 @@ class TabulatedFluid:
     def T_ph(self, p, h):
         return self._upd("HmassP_INPUTS", h, p).T()
 
+    def quality_ph(self, p, h) -> float | None:
+        """The vapour's mass fraction at (p, h): 1 superheated, 0 subcooled, None above
+        the critical pressure (no phases to tell apart)."""
+        import CoolProp.CoolProp as CP
+
+        st = self._upd("HmassP_INPUTS", h, p)
+        if st.phase() == CP.iphase_twophase:
+            return float(st.Q())
+        if p >= st.p_critical():
+            return None
+        return 1.0 if st.T() >= st.T_critical() or st.rhomass() < st.rhomass_critical() \
+            else 0.0
+
     def isentropic(self, rho, u, p2):
         rho = np.atleast_1d(rho)
         u = np.atleast_1d(u)

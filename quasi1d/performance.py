@@ -16,6 +16,8 @@ Definitions (per lobe period = one chamber's cycle, t_P = period / omega_outer):
                                 the reversible isothermal path would condense the vapour,
                                 a condenser's work, not a compressor's; and a wet suction)
     discharge_temperature_K     temperature of the delivered gas at its mean enthalpy
+    discharge_quality           its vapour mass fraction (CoolProp fluids: 1 superheated,
+                                None above the critical pressure)
     discharge_mixture_temperature_K  (oil injected) the delivered gas and oil mixed to one
                                 temperature (what a thermometer in the discharge line of an
                                 oil-flooded machine reads); None without oil
@@ -96,6 +98,10 @@ def figures(sol: CycleSolution) -> dict:
         "discharge_open_deg": math.degrees(geo.discharge_open),
         "fluid": op.fluid,
     }
+    if hasattr(fl, "quality_ph") and a[ACC_M_DIS] > 0:
+        # (a wet discharge's temperature is its saturation temperature: the quality says
+        # how wet)
+        out["discharge_quality"] = fl.quality_ph(op.p_discharge_Pa, a[ACC_H_DIS] / a[ACC_M_DIS])
     if model.vapour:
         c = model.acc_cols
         out["evaporated_kg_s"] = float(a[c.evaporated] / t_period)

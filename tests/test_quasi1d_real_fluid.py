@@ -70,6 +70,7 @@ def test_r134a_refrigeration_example_runs_superheated_throughout(tmp_path):
     s1 = CP.PropsSI("Smass", "P", 3e5, "T", 285.0, "R134a")
     assert fig["discharge_temperature_K"] > CP.PropsSI("T", "P", 9e5, "Smass", s1, "R134a")
     assert 0.5 < fig["adiabatic_efficiency"] < 1.0
+    assert fig["discharge_quality"] == 1.0
     tr = np.genfromtxt(tmp_path / "tr" / "chamber_cycle.csv", delimiter=",", names=True)
     Tsat = np.array([CP.PropsSI("T", "P", p, "Q", 1.0, "R134a") for p in tr["p_Pa"]])
     assert np.min(tr["T_K"] - Tsat) > 5.0  # superheated by > 5 K everywhere (measured 11.2)
@@ -186,9 +187,12 @@ def test_wet_compression_conserves_mass_and_energy(machine):
     wet = (q > 0.0) & (q < 1.0)
     assert np.all(q[wet] > 0.9) and wet.mean() > 0.8
     assert np.any(~wet) and np.all(p[~wet] < 1.01 * 3e5)
-    # The delivered mixture is wet too: its (p, h) temperature is the saturation one.
+    # The delivered mixture is wet too: its (p, h) temperature is the saturation one, and
+    # its quality lies between the isentrope's (losses only add entropy) and 1.
     assert fig["discharge_temperature_K"] == pytest.approx(
         CP.PropsSI("T", "P", 9e5, "Q", 1.0, "R134a"), abs=1e-6)
+    s1 = CP.PropsSI("Smass", "P", 3e5, "Q", 0.95, "R134a")
+    assert CP.PropsSI("Q", "P", 9e5, "Smass", s1, "R134a") < fig["discharge_quality"] < 1.0
 
 
 # --- (d) the table against the flash -------------------------------------------------------------

@@ -171,6 +171,14 @@ def _law(path, leak, named, kind) -> PathLaw:
         if path.measure != "length":
             raise CaseError(f"{where} is an orifice (its column is an area): the "
                             "\"cfd-calibrated\" fit is per length of a sealing line")
+    if path.measure != "length" and model != "rarefied":
+        for s in layers:
+            if s.gap_m is not None:
+                # (an orifice's area is the table's: only the rarefied law reads a gap,
+                # as the hole's size that sets its Knudsen number)
+                raise CaseError(f"[{s.section}] of {s.where} gives gap_um, but {where} is an "
+                                f"orifice (its column is an area) and model {model!r} reads "
+                                "no gap there: its flow is coefficient x area")
     moving = bool(leak.wall_motion and path.moving_wall and model != "none")
     in_fit = moving and model == "cfd-calibrated" and fit.wall != 0.0
     return PathLaw(path, model, gap, pick("coefficient", None, leak.coefficient),

@@ -130,6 +130,24 @@ def test_a_choked_blow_hole_passes_the_critical_mass_flow(gap_um):
     assert checked >= 1
 
 
+@pytest.mark.parametrize("model, refused", [("nozzle", True), ("fanno", True),
+                                             ("rarefied", False)])
+def test_a_gap_given_to_an_orifice_is_refused_where_its_law_reads_none(model, refused):
+    # The blow-hole's flow area is the table's column: a gap there was ignored without a
+    # word, except by the rarefied law (the hole's size sets its Knudsen number).
+    from rotorflow.quasi1d.paths import resolve
+
+    leak = Leakage.from_section({"gap_um": 20, "model": model,
+                                 "blow-hole": {"gap_um": 100}}, "case.toml")
+    paths = blow_hole_table(2e-6).paths
+    if not refused:
+        assert {law.path.name: law.gap_m for law in resolve(paths, leak)}["blow-hole"] \
+            == pytest.approx(100e-6)
+        return
+    with pytest.raises(CaseError, match=r"\[leakage.blow-hole\] of case.toml gives gap_um"):
+        resolve(paths, leak)
+
+
 def twin_screw_like_table():
     """Paths of another family's kinds: a tip line to the older chamber with the
     family's own gap (seen from this chamber only), a blow-hole orifice, the

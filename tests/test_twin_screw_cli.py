@@ -53,6 +53,10 @@ BAD = {
                                    "wrap_male_deg = 325\nwrap_female_deg = 217"), "exactly one"),
     "bores apart": (CIRCULAR.replace("centre_distance_mm = 78", "centre_distance_mm = 99"),
                     "bores do not meet"),
+    # (it was an undercut "at male rolling angle -39224862.771 deg")
+    "rotors past each other's axis": (CIRCULAR.replace("centre_distance_mm = 78",
+                                                       "centre_distance_mm = 1"),
+                                      "too small for these diameters"),
     "male inside its pitch circle": (CIRCULAR.replace("male_diameter_mm = 100",
                                                   "male_diameter_mm = 62"), "addendum"),
     "unknown profile": (CIRCULAR.replace('profile = "circular"', 'profile = "sigma"'),

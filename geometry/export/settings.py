@@ -242,6 +242,6 @@ class Export:
 def _front_angle(d: dict, where: str) -> float:
     angle = _num(d, "cutter_front_angle_deg", where, 0.0)
     if not -45.0 < angle < 45.0:
-        raise CaseError(f"key 'cutter_front_angle_deg' in {_where(where)} must lie between "
-                        f"-45 and 45 deg, got {angle:g}")
+        raise CaseError(f"key 'cutter_front_angle_deg' in {_where(where)} must lie "
+                        f"strictly between -45 and 45 deg, got {angle:g}")
     return angle

@@ -122,6 +122,14 @@ def build(profile: str, lobes_male: int, lobes_female: int, centre_distance: flo
     if hf < -PITCH_TOL * centre_distance:
         raise CaseError(f"the female diameter {female_diameter * 1e3:.4g} mm is inside its "
                         f"pitch circle ({2e3 * g.r2:.4g} mm)")
+    for name, root, diameter in (("female", g.r2 - hm, male_diameter),
+                                 ("male", g.r1 - hf, female_diameter)):
+        if not root > 0.0:
+            other = "male" if name == "female" else "female"
+            raise CaseError(f"the {other} diameter {diameter * 1e3:.4g} mm leaves the {name} "
+                            f"no root (the {other} tips reach {-root * 1e3:.4g} mm past its "
+                            f"axis): the centre distance {centre_distance * 1e3:.4g} mm is "
+                            f"too small for these diameters")
     given = tip_radius is not None
     if pressure_angle is not None:
         if profile != "involute":

@@ -285,6 +285,8 @@ def check_no_undercut(piece) -> None:
     bad = speed < -UNDERCUT_TOL * scale
     if bad.any():
         i = int(np.argmax(bad))
-        angle = float(np.degrees(piece.rolling_angle(t[i:i + 1])[0]))
+        # (within a turn: near a rack normal parallel to the pitch line the rolling angle
+        # runs to thousands of degrees, which named nothing a user can find)
+        angle = math.remainder(float(np.degrees(piece.rolling_angle(t[i:i + 1])[0])), 360.0)
         raise CaseError(f"undercut: the {piece.name} turns back (a cusp) at t = {t[i]:.4f}, "
                         f"male rolling angle {angle:.3f} deg")

@@ -20,6 +20,8 @@ import numpy as np
 DRY_AIR_R = 8.31451 / 0.02896546
 DRY_AIR_CP_TERMS = (3.49156461, ((0.228800013, 11225.6465), (0.816824551, 3381.18178),
                                  (0.209866139, 2198.01519)))
+# The top of that fit: a chamber hotter than this is warned of (quasi1d.result).
+DRY_AIR_T_FITTED_MAX = 2500.0
 # The range of T(u) tabulated for the chamber equations; outside it is reported.
 THERMALLY_PERFECT_T_RANGE = (20.0, 10000.0)
 THERMALLY_PERFECT_NODES = 8192
@@ -44,6 +46,7 @@ class ThermallyPerfectGas:
     a: float = DRY_AIR_CP_TERMS[0]
     modes: tuple = DRY_AIR_CP_TERMS[1]
     name: str = "air"
+    T_fitted_max: float = DRY_AIR_T_FITTED_MAX
 
     # -- closed forms in T ---------------------------------------------------------------
     def cp(self, T):

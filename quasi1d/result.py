@@ -83,9 +83,43 @@ def traces(sol: CycleSolution):
     return machine, chamber
 
 
+#: A chamber pressure above this multiple of the larger of the discharge pressure and
+#: the built-in one (suction compressed isentropically to the discharge opening) is
+#: warned of: the discharge port does not empty the chamber (a radial port alone on a
+#: 4/6 at volume ratio 6 squeezed it to 62.6 bar against 4 bar).
+OVERPRESSURE = 2.0
+
+
 def make_result(sol: CycleSolution) -> SimulationResult:
     machine, chamber = traces(sol)
-    return SimulationResult(figures(sol), machine, chamber, sol)
+    return SimulationResult(_extremes(figures(sol), chamber, sol.model), machine, chamber,
+                            sol)
+
+
+def _extremes(fig: dict, chamber: dict, model) -> dict:
+    """The chamber's highest pressure and temperature over its life, and warnings where
+    they say the result is not a working machine's or lies beyond the fluid's model."""
+    p, T = chamber["p_Pa"], chamber["T_K"]
+    if not len(p):
+        return fig
+    fig = {**fig, "chamber_pressure_max_Pa": float(np.max(p)),
+           "chamber_temperature_max_K": float(np.max(T))}
+    geo, suc = model.geo, model.suc
+    built_in = suc.p * (geo.v_trapped / geo.v_discharge) ** suc.kappa
+    warn = [fig["warning"]] if fig.get("warning") else []
+    limit = OVERPRESSURE * max(model.dis.p, built_in)
+    if np.max(p) > limit:
+        warn.append(f"the chamber reaches {np.max(p) / 1e5:.4g} bar, over {OVERPRESSURE:g} "
+                    f"times the larger of the discharge and the built-in pressure "
+                    f"({max(model.dis.p, built_in) / 1e5:.4g} bar): its discharge port does "
+                    f"not empty it")
+    t_fit = getattr(model.fluid, "T_fitted_max", None)
+    if t_fit is not None and np.max(T) > t_fit:
+        warn.append(f"the gas reaches {np.max(T):.0f} K, above the {t_fit:.0f} K its "
+                    f"properties were fitted to")
+    if warn:
+        fig["warning"] = "; ".join(warn)
+    return fig
 
 
 def plot_cycle(result: SimulationResult, folder: Path, stem: str = "quasi1d") -> list[Path]:

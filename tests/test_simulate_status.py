@@ -6,6 +6,8 @@ import json
 import subprocess
 import sys
 
+import numpy as np
+
 from .conftest import CASES
 
 DEFAULT = (CASES / "default.toml").read_text()
@@ -43,3 +45,30 @@ def test_a_working_machine_has_no_warning(tmp_path):
     out, fig = _simulate(tmp_path, DEFAULT)
     assert out.returncode == 0 and out.stderr == ""
     assert fig["mass_flow_kg_s"] > 0 and "warning" not in fig
+
+
+def test_a_discharge_port_that_cannot_empty_the_chamber_is_warned_of(tmp_path):
+    # A nozzle discharge port of a thousandth of the area: the chamber is squeezed far
+    # above both the discharge pressure (2.6 bar) and the built-in one (2^1.4 bar)
+    text = DEFAULT + '\n[ports]\nmodel = "nozzle"\ncoefficient = 0.001\n'
+    out, fig = _simulate(tmp_path, text)
+    assert out.returncode == 0, out.stderr
+    assert fig["chamber_pressure_max_Pa"] > 2.0 * 2.6e5
+    assert "does not empty it" in fig["warning"] and "does not empty it" in out.stderr
+
+
+def test_a_gas_hotter_than_its_fitted_properties_is_warned_of():
+    from types import SimpleNamespace
+
+    from rotorflow.quasi1d.dry_air import DRY_AIR_T_FITTED_MAX, dry_air
+    from rotorflow.quasi1d.result import _extremes
+
+    model = SimpleNamespace(geo=SimpleNamespace(v_trapped=2.0, v_discharge=1.0),
+                            suc=SimpleNamespace(p=1e5, kappa=1.4),
+                            dis=SimpleNamespace(p=3e5), fluid=dry_air())
+    chamber = {"p_Pa": np.array([1e5, 3e5]), "T_K": np.array([300.0, 3968.8])}
+    fig = _extremes({"mass_flow_kg_s": 1.0}, chamber, model)
+    assert fig["chamber_temperature_max_K"] == 3968.8
+    assert f"above the {DRY_AIR_T_FITTED_MAX:.0f} K" in fig["warning"]
+    cool = _extremes({}, {"p_Pa": chamber["p_Pa"], "T_K": np.array([300.0, 450.0])}, model)
+    assert "warning" not in cool

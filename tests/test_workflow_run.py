@@ -221,6 +221,20 @@ def test_a_late_stage_refusal_stops_the_run_before_any_stage_writes(tmp_path, ed
     assert len(lines) == 1 and word in lines[0], out.stderr
     assert not (tmp_path / "build").exists()
 
+
+def test_a_disc_cutter_that_cannot_be_made_stops_the_run_before_any_stage_writes(tmp_path):
+    # The 4/6 pin-cycloid male's tooth space: the tool's outermost point (the male's
+    # root) envelopes nothing.  The run wrote the geometry, table, quasi-1D and render
+    # stages before the solids stage found it.
+    case = tmp_path / "cutter.toml"
+    case.write_text((CASES / "twin_screw_4_6.toml").read_text() + (
+        '\n[export]\nformats = ["cutter"]\nclearance_um = 40\nclearance_on = "female"\n'))
+    out = rotorflow("run", case, "--build", tmp_path / "build")
+    assert out.returncode == 2, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "the male rotor's disc cutter" in lines[0], out.stderr
+    assert not (tmp_path / "build").exists()
+
 # ---------------------------------------------------------------- SIGKILL mid-stage
 SLOW_STAGE = '''
 import os, sys, time

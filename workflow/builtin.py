@@ -88,7 +88,7 @@ def check_solids(case, case_path, cached: dict) -> None:
     from rotorflow.geometry.export.driver import check
     from rotorflow.geometry.export.settings import Export
 
-    check(case, Export.from_section(case.raw["export"], str(case_path)))
+    check(case, Export.from_section(case.raw["export"], str(case_path)), cutters=True)
 
 
 #: Angle step of the contact table the geometry stage writes (one lobe period).

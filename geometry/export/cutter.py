@@ -303,7 +303,11 @@ def regenerate(setup: CutterSetup, axial, radius, refine: int = 2):
     roots = _roots(g, 0.5 * math.pi, len(s))
     psi = _nearest_zero(roots, np.isfinite(roots))
     if np.isnan(psi).any():
-        raise CaseError("the form-cutter profile does not envelope a rotor flank everywhere")
+        bad = R[np.isnan(psi)]
+        raise CaseError(f"the form-cutter profile does not envelope the rotor's flank "
+                        f"everywhere: no contact where the tool's radius is "
+                        f"{bad.min() * 1e3:.4g}-{bad.max() * 1e3:.4g} mm "
+                        f"({int(np.isnan(psi).sum())} of its {psi.size} points)")
     T, _ = _tool_points(setup, h, R, psi)
     return s, _to_transverse(T, k)
 
@@ -314,7 +318,13 @@ def round_trip(curve, cutter: Cutter, axial=None, radius=None) -> dict:
     prof = _Turned(curve, cutter.root)
     axial = cutter.axial if axial is None else np.asarray(axial, float)
     radius = cutter.radius if radius is None else np.asarray(radius, float)
-    s, q = regenerate(cutter.setup, axial, radius)
+    try:
+        s, q = regenerate(cutter.setup, axial, radius)
+    except CaseError as e:
+        raise CaseError(f"the {curve.name} rotor's disc cutter: {e}; a disc tool cannot cut "
+                        f"this profile at setting angle "
+                        f"{math.degrees(cutter.setup.setting_angle):.4g} deg ([export] "
+                        f"cutter_setting_angle_deg)") from None
     s_nodes = _meridian(axial, radius)[0]
     u0 = np.interp(s, s_nodes, cutter.u)
     _, dist, _ = closest(prof, q, u0, iterations=12)

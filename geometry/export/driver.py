@@ -71,9 +71,11 @@ FLUID_GAP_SHARE = 0.45
 VOLUME_REFINES = 3
 
 
-def check(case, settings: Export):
+def check(case, settings: Export, cutters: bool = False):
     """The assembly of ``case``'s rotors, or a CaseError for any export it cannot make
-    (found before a file is written)."""
+    (found before a file is written).  With ``cutters``, the form cutters are made and
+    enveloped back onto their rotors too (a second or two each; `rotorflow run` asks
+    before its first stage writes, `export` makes them once, as it writes them)."""
     if settings.wants("fluid") and not min(settings.clearance_m) > 0.0:
         raise CaseError("the fluid domain needs clearance_um > 0 everywhere: with no gap the "
                         "chambers touch along the sealing lines and it is not a solid")
@@ -85,6 +87,8 @@ def check(case, settings: Export):
     if settings.wants("cutter"):
         for part in asm.holes:
             _setup(asm, part.name)
+            if cutters:
+                _checked_cutter(asm, part)
     return asm
 
 
@@ -310,10 +314,35 @@ def _setup(asm: Assembly, rotor: str):
     return default_setup(asm.machine.pair, asm.machine.sweep, angle, centre, rotor)
 
 
+def _checked_cutter(asm: Assembly, part: Part) -> dict:
+    """One rotor's form cutter made and enveloped back onto it, unwritten (its round
+    trip, or a CaseError)."""
+    from .cutter import form_cutter
+
+    cut = form_cutter(part.curve, _setup(asm, part.name), asm.settings.tolerance_m)
+    return _round_trip(asm, part, cut)
+
+
+def _round_trip(asm: Assembly, part: Part, cut, axial=None, radius=None) -> dict:
+    """The cutter's round trip (as written, where given), refused beyond tolerance_um."""
+    from .cutter import round_trip
+
+    name, tol = part.name, asm.settings.tolerance_m
+    rt = round_trip(part.curve, cut, axial, radius)
+    change = f"change cutter_setting_angle_deg or cutter_centre_distance_mm ({name})"
+    if rt["round_trip_max_m"] > tol:
+        raise CaseError(f"the form cutter regenerates the {name} rotor only to "
+                        f"{rt['round_trip_max_m'] * 1e6:.3g} um (> tolerance_um): {change}")
+    if rt["interference_m"] > tol:
+        raise CaseError(f"the form cutter cuts {rt['interference_m'] * 1e6:.3g} um into the "
+                        f"{name} rotor: {change}")
+    return rt
+
+
 def _cutter(out: Path, asm: Assembly, part: Part, unit: str, scale: float) -> dict:
     """The form cutter of one rotor: its profile (CSV), written, read back and enveloped
     back onto the rotor (round trip), and its JSON side-car."""
-    from .cutter import form_cutter, round_trip
+    from .cutter import form_cutter
 
     name, curve, tol = part.name, part.curve, asm.settings.tolerance_m
     setup = _setup(asm, name)
@@ -323,14 +352,7 @@ def _cutter(out: Path, asm: Assembly, part: Part, unit: str, scale: float) -> di
     np.savetxt(path, data, delimiter=",", comments="", fmt="%.9f",
                header=f"axial_{unit},radius_{unit},rotor_x_{unit},rotor_y_{unit},rotor_z_{unit}")
     written = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2) / scale
-    rt = round_trip(curve, cut, written[:, 0], written[:, 1])
-    change = f"change cutter_setting_angle_deg or cutter_centre_distance_mm ({name})"
-    if rt["round_trip_max_m"] > tol:
-        raise CaseError(f"the form cutter regenerates the {name} rotor only to "
-                        f"{rt['round_trip_max_m'] * 1e6:.3g} um (> tolerance_um): {change}")
-    if rt["interference_m"] > tol:
-        raise CaseError(f"the form cutter cuts {rt['interference_m'] * 1e6:.3g} um into the "
-                        f"{name} rotor: {change}")
+    rt = _round_trip(asm, part, cut, written[:, 0], written[:, 1])
     side = {
         "tool_axis": "through (centre_distance, 0, 0), direction (0, cos S, sin S), rotor frame",
         "rotor_frame": f"{name} rotor axis on z, low-pressure face z = 0, tooth space of lobe 0 "

@@ -76,6 +76,8 @@ class RotorPair(ABC):
     #: and death exactly (else they are its zero nodes either side, and the life is
     #: located between them: :func:`.ports.planar_life`).
     life_on_nodes = True
+    #: Whether the pair can be swept conically (the internal gear's CRC.60 rotors).
+    conical_sweep = True
 
     @property
     @abstractmethod

@@ -233,8 +233,8 @@ class SweptMachine:
     def pitch_length(self) -> float | None:
         """Axial advance of the rotor per lobe period, seed 000 Eq. 23 (constant lead
         only); None for straight rotors."""
-        if self.sweep.wrap == 0.0:
-            return None
+        if self.sweep.wrap == 0.0 or self.sweep.lead_ratio != 1.0:
+            return None  # (a variable lead has no one pitch)
         return self.period * self.sweep.length / self.sweep.wrap
 
     @cached_property

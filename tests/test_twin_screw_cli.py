@@ -53,6 +53,9 @@ BAD = {
                                    "wrap_male_deg = 325\nwrap_female_deg = 217"), "exactly one"),
     "bores apart": (CIRCULAR.replace("centre_distance_mm = 78", "centre_distance_mm = 99"),
                     "bores do not meet"),
+    "conical sweep": (CIRCULAR.replace('kind = "helical"',
+                                       'kind = "conical"\ndiameter_end_mm = 80'),
+                      "cannot be swept conically"),
     # (it was an undercut "at male rolling angle -39224862.771 deg")
     "rotors past each other's axis": (CIRCULAR.replace("centre_distance_mm = 78",
                                                        "centre_distance_mm = 1"),

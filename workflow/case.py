@@ -187,6 +187,9 @@ def _sweep_law(data: dict, path: Path, pair: RotorPair):
             if wrap_bar < 0.0:
                 raise CaseError(f"wrap_bar must not be negative in {where}")
     scale_end, lead_ratio = 1.0, 1.0
+    if kind == "conical" and not pair.conical_sweep:
+        raise CaseError(f"a {pair.family} pair cannot be swept conically in {where} "
+                        f"(kind: straight or helical)")
     if kind == "conical":
         if "diameter_end_mm" not in s:
             raise CaseError(f"missing key 'diameter_end_mm' in {where} (conical sweep)")

@@ -51,6 +51,9 @@ class TwinScrewPair(ContactSearch, RotorPair):
     #: The section table runs from the zero node before the birth to the one after the
     #: death (found by cutting sections on its grid).
     life_on_nodes = False
+    #: Two rotors on parallel axes in cylindrical bores: no conical sweep (its section's
+    #: scale would shrink the centre distance along z, and its loads were left null).
+    conical_sweep = False
 
     gearing: Gearing
     male: TwinProfile

@@ -117,6 +117,8 @@ QUASI1D = {
     "discharge_mixture_temperature_K": ("Discharge temperature, gas and oil mixed", "K"),
     "discharge_quality": ("Vapour mass fraction of the delivered refrigerant", "fraction"),
     "warning": ("Warning", ""),
+    "suction_return_enthalpy_W": ("Enthalpy carried back into the suction above its own",
+                                  "W"),
     "chamber_pressure_max_Pa": ("Highest chamber pressure over the cycle", "Pa"),
     "chamber_temperature_max_K": ("Highest chamber temperature over the cycle", "K"),
     "heat_to_gas_W": ("Heat to the gas", "W"),

@@ -16,6 +16,9 @@ Definitions (per lobe period = one chamber's cycle, t_P = period / omega_outer):
                                 the reversible isothermal path would condense the vapour,
                                 a condenser's work, not a compressor's; and a wet suction)
     discharge_temperature_K     temperature of the delivered gas at its mean enthalpy
+    suction_return_enthalpy_W   (no oil or liquid) the enthalpy the gas flowing back into the
+                                suction plenum carries above the suction's own, lost there
+                                (power = delivered enthalpy rise + this - heat to the gas)
     discharge_quality           its vapour mass fraction (CoolProp fluids: 1 superheated,
                                 None above the critical pressure)
     discharge_mixture_temperature_K  (oil injected) the delivered gas and oil mixed to one
@@ -46,7 +49,7 @@ import math
 
 from .cycle import CycleSolution
 from .fluids import suction_given
-from .network import ACC_H_DIS, ACC_M_DIS, ACC_M_SUC, ACC_Q, ACC_W
+from .network import ACC_H_DIS, ACC_H_SUC, ACC_M_DIS, ACC_M_SUC, ACC_Q, ACC_W
 
 
 def figures(sol: CycleSolution) -> dict:
@@ -98,6 +101,12 @@ def figures(sol: CycleSolution) -> dict:
         "discharge_open_deg": math.degrees(geo.discharge_open),
         "fluid": op.fluid,
     }
+    if not model.oil and not model.vapour:
+        # What the gas flowing back into the suction plenum carries above the suction's
+        # own enthalpy: the plenum is held at its state, so this leaves the machine there
+        # (it is why the indicated power exceeds the delivered gas's enthalpy rise).
+        out["suction_return_enthalpy_W"] = float(
+            (a[ACC_M_SUC] * model.suc.h - a[ACC_H_SUC]) / t_period)
     if hasattr(fl, "quality_ph") and a[ACC_M_DIS] > 0:
         # (a wet discharge's temperature is its saturation temperature: the quality says
         # how wet)

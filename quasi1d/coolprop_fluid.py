@@ -210,10 +210,14 @@ class TabulatedFluid:
         always): the reversible isothermal path then condenses the vapour, and the
         efficiency against it compares a compressor with a condenser (R134a at 3 bar /
         285 K -> 9 bar: 0.27).  A supercritical isotherm (CoolProp air, CO2 sucked above
-        304 K) never does."""
+        304 K) never does, nor one that starts above the critical pressure (CO2 from 80
+        bar at 300 K: dense, but no phase change on the way)."""
         st = self._start(p1, T1, q)
         h1, s1, T1 = st.hmass(), st.smass(), st.T()
-        if q is not None or (T1 < st.T_critical() and p2 >= self._upd("QT_INPUTS", 1.0, T1).p()):
+        if q is not None:
+            return None
+        if T1 < st.T_critical() and p1 < st.p_critical() \
+                and p2 >= self._upd("QT_INPUTS", 1.0, T1).p():
             return None
         st = self._upd("PT_INPUTS", p2, T1)
         return (st.hmass() - h1) - T1 * (st.smass() - s1)

@@ -383,6 +383,10 @@ def test_isothermal_work_only_where_the_isotherm_stays_vapour():
     co2 = tabulated("CO2", 80e5, 120e5, 300.0, 300.0, 300.0, 1.3)
     assert co2.work_isothermal(35e5, 310.0, 95e5) == pytest.approx(
         _isothermal_reference("CO2", 35e5, 310.0, 95e5), rel=1e-7)
+    # From 80 bar (above the critical 73.8 bar) at 300 K, below the critical temperature:
+    # no dome on the way either (it was None)
+    assert co2.work_isothermal(80e5, 300.0, 130e5) == pytest.approx(
+        _isothermal_reference("CO2", 80e5, 300.0, 130e5), rel=1e-7)
 
 
 def test_a_low_quality_suction_starts_from_states_the_fluid_has(machine):

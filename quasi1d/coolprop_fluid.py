@@ -274,7 +274,7 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
                 f"T_suction_K = {Ts:g} is not the saturation temperature of {name} at "
                 f"{ps / 1e5:g} bar ({Tsat:.2f} K) that suction_quality = {qs:g} implies")
     else:
-        _refuse_outside_the_equation(name, ps, pd, Ts)
+        _refuse_outside_the_equation(name, ps, pd, Ts, vr)
         Tsat = dew_temperature(name, ps)
         if Tsat is not None and Ts <= Tsat + SATURATION_T_TOLERANCE_K:
             state = _below_dew(name, ps, Ts, Tsat)
@@ -298,9 +298,10 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
     return fluid
 
 
-def _refuse_outside_the_equation(name, ps, pd, Ts) -> None:
+def _refuse_outside_the_equation(name, ps, pd, Ts, vr) -> None:
     """A suction temperature or a pressure beyond the range of CoolProp's equation of
-    state for ``name`` is refused (CoolProp extrapolates there without a word)."""
+    state for ``name`` is refused (CoolProp extrapolates there without a word), and so is
+    a built-in volume ratio that squeezes a dense suction past it along its isentrope."""
     import CoolProp.CoolProp as CP
 
     st = CP.AbstractState("HEOS", name)
@@ -310,6 +311,18 @@ def _refuse_outside_the_equation(name, ps, pd, Ts) -> None:
     if max(ps, pd) > st.pmax():
         raise CaseError(f"a pressure of {max(ps, pd) / 1e5:g} bar is above the range of "
                         f"CoolProp's equation of state for {name} ({st.pmax() / 1e5:g} bar)")
+    st.update(CP.PT_INPUTS, ps, Ts)
+    rho, s = st.rhomass(), st.smass()
+    try:
+        st.update(CP.DmassSmass_INPUTS, vr * rho, s)
+        p_end = st.p()
+    except ValueError:
+        p_end = math.inf
+    if p_end > st.pmax():
+        raise CaseError(f"volume_ratio {vr:g} squeezes the suction of {name} "
+                        f"({rho:.4g} kg/m3) to {p_end / 1e5:.4g} bar along its isentrope, "
+                        f"beyond CoolProp's range ({st.pmax() / 1e5:g} bar): a dense suction "
+                        f"needs a volume ratio near 1")
 
 
 def _below_dew(name, p, T, T_dew) -> str:

@@ -135,3 +135,13 @@ def test_a_wet_suction_whose_liquid_cannot_fit_is_refused_as_a_hydraulic_lock(tm
     line = _refused(tmp_path, _case("T_suction_K = 285",
                                     f"T_suction_K = {TSAT_3BAR:.2f}\nsuction_quality = 0.01"))
     assert "hydraulic lock" in line and f"{share:.1%}" in line, line
+
+
+def test_a_dense_suction_squeezed_past_the_equation_of_state_is_named():
+    # CO2 at 80 bar / 300 K is liquid-like (753 kg/m3): a volume ratio of 2.1 takes its
+    # isentrope to 1.8e4 bar (CoolProp's flash at 2.1 times the density), past the
+    # equation's 8000 bar; the message was CoolProp's melting line at 1.79e9 Pa.  At a
+    # volume ratio of 1.2 it runs (test_supercritical_suction_has_no_dome_to_refuse).
+    with pytest.raises(CaseError, match=r"volume_ratio 2.1 squeezes the suction of CO2"):
+        tabulated("CO2", 80e5, 130e5, 300.0, 300.0, 300.0, 2.1)
+    assert tabulated("CO2", 80e5, 130e5, 300.0, 300.0, 300.0, 1.2).name == "CO2"

@@ -274,7 +274,7 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
                 f"T_suction_K = {Ts:g} is not the saturation temperature of {name} at "
                 f"{ps / 1e5:g} bar ({Tsat:.2f} K) that suction_quality = {qs:g} implies")
     else:
-        _refuse_outside_the_equation(name, ps, pd, Ts, vr)
+        _refuse_outside_the_equation(name, ps, pd, Ts)
         Tsat = dew_temperature(name, ps)
         if Tsat is not None and Ts <= Tsat + SATURATION_T_TOLERANCE_K:
             state = _below_dew(name, ps, Ts, Tsat)
@@ -283,6 +283,8 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
                 f"the saturation temperature there is {Tsat:.2f} K; a dry suction needs "
                 f"T_suction_K above it, a wet one suction_quality in (0, 1] "
                 f"(1: saturated vapour)")
+    if qs is None:
+        _refuse_squeezed_past_the_equation(name, ps, Ts, vr)
     try:
         box = reachable_box(name, ps, pd, Ts, qs, Tw, To, vr)
     except ValueError as exc:
@@ -298,10 +300,9 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
     return fluid
 
 
-def _refuse_outside_the_equation(name, ps, pd, Ts, vr) -> None:
+def _refuse_outside_the_equation(name, ps, pd, Ts) -> None:
     """A suction temperature or a pressure beyond the range of CoolProp's equation of
-    state for ``name`` is refused (CoolProp extrapolates there without a word), and so is
-    a built-in volume ratio that squeezes a dense suction past it along its isentrope."""
+    state for ``name`` is refused (CoolProp extrapolates there without a word)."""
     import CoolProp.CoolProp as CP
 
     st = CP.AbstractState("HEOS", name)
@@ -311,13 +312,21 @@ def _refuse_outside_the_equation(name, ps, pd, Ts, vr) -> None:
     if max(ps, pd) > st.pmax():
         raise CaseError(f"a pressure of {max(ps, pd) / 1e5:g} bar is above the range of "
                         f"CoolProp's equation of state for {name} ({st.pmax() / 1e5:g} bar)")
+
+
+def _refuse_squeezed_past_the_equation(name, ps, Ts, vr) -> None:
+    """A built-in volume ratio that squeezes a dense (dry) suction past the range of
+    CoolProp's equation of state along its isentrope is refused."""
+    import CoolProp.CoolProp as CP
+
+    st = CP.AbstractState("HEOS", name)
     st.update(CP.PT_INPUTS, ps, Ts)
     rho, s = st.rhomass(), st.smass()
     try:
         st.update(CP.DmassSmass_INPUTS, vr * rho, s)
         p_end = st.p()
     except ValueError:
-        p_end = math.inf
+        return  # (a flash that fails is no evidence: the table's own range check follows)
     if p_end > st.pmax():
         raise CaseError(f"volume_ratio {vr:g} squeezes the suction of {name} "
                         f"({rho:.4g} kg/m3) to {p_end / 1e5:.4g} bar along its isentrope, "

@@ -16,6 +16,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..planar import TWO_PI
 from .tip_bands import TipBands
 
 #: Edge-classification tolerance per C: a boundary edge within this of a bore circle
@@ -271,7 +272,7 @@ class Boundaries(TipBands):
             return self._snap_land(r, x, neighbour, psi, part)
         if neighbour in (BORE_M, BORE_F):
             tips = self._tips_at(r, psi)
-            k = int(np.argmin(np.linalg.norm(tips - x, axis=-1)))
+            k = self._tip_of(r, x, tips)
             part.tips.append((r, k, tips[k]))
             return tips[k]
         if neighbour in (MALE, FEMALE) and neighbour != r:
@@ -286,6 +287,27 @@ class Boundaries(TipBands):
             if d[k] < TIP_MATCH * self.C or self._in_tip_band(r, k, x, psi):
                 return tips[k]
         return x
+
+    def _tip_of(self, r, x, tips) -> int:
+        """The lobe of rotor r at whose top the bore end x lies (``tips``: the tip
+        points, fixed frame): the nearest tip point, or where the lobe's largest radius
+        is an arc (the pin-cycloid female's land, its tip point the clockwise end:
+        :attr:`.TwinScrewPair.tip_spans`) the nearest such arc.  A groove meets the bore
+        at both ends of a land, and the nearest tip point to its corner at the far end
+        is the next lobe's where the land is wider than half a lobe (38.5 of 72 deg on
+        the 3/5, 53.7 of 90 on the 3/4): both ends of the groove's arc took that tip,
+        which booked no load for a groove cut in the mesh, where a whole one books its
+        two tips' (a female groove's force left over at uniform pressure), and its tip
+        lines were lost."""
+        span = self.pair.tip_spans[r]
+        if span == 0.0:
+            return int(np.argmin(np.linalg.norm(tips - x, axis=-1)))
+        o = self.O[r]
+        t = np.arctan2(tips[:, 1] - o[1], tips[:, 0] - o[0])
+        # x's angle from each arc's middle, less the arc's half-width: 0 on the arc
+        off = np.remainder(math.atan2(x[1] - o[1], x[0] - o[0]) - t - 0.5 * span + math.pi,
+                           TWO_PI) - math.pi
+        return int(np.argmin(np.maximum(np.abs(off) - 0.5 * span, 0.0)))
 
     def _snap_land(self, r, x, neighbour, psi, part):
         """:meth:`_snap_tip` on a rotor with lands (arcs on its bore, :meth:`.TwinScrewPair

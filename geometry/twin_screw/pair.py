@@ -22,6 +22,7 @@ from scipy.optimize import minimize_scalar
 
 from rotorflow.errors import CaseError
 
+from .. import scalar
 from ..family import Rotor, RotorPair
 from ..planar import TWO_PI, rotate
 from .contact_search import ContactSearch
@@ -31,6 +32,12 @@ from .profiles import TwinProfile
 #: Samples per lobe on which a lobe's tip (largest radius) is bracketed before it is
 #: polished; a tip is narrower than a lobe by far more than 1/512.
 TIP_SCAN = 512
+#: Samples within this (per C) of the largest radius lie on an arc of that radius (a
+#: land: the arc's rounding is ~1e-16 C, while the samples next to a smooth tip fall
+#: below it by more than 1e-10 C, and a sharp one's by far more).
+PLATEAU_TOL = 1e-12
+#: Bisections of a land's clockwise end (from a sample's bracket to rounding).
+PLATEAU_STEPS = 60
 #: Male angles over one lobe period at which the contact line's length is figured.
 CONTACT_LINE_SAMPLES = 24
 
@@ -90,10 +97,14 @@ class TwinScrewPair(ContactSearch, RotorPair):
         return x, math.sqrt(r1 * r1 - x * x)
 
     def _tip(self, profile: TwinProfile) -> tuple[float, float]:
-        """(u, radius) of lobe 0's tip: its largest radius, polished (a land's middle)."""
+        """(u, radius) of lobe 0's tip: its largest radius, polished (a land's middle;
+        an arc of the largest radius that is no land, its clockwise end: :meth:`_top`)."""
         land = self._land(profile)
         if land is not None:
             return land[0], land[1]
+        top = self._top(profile)
+        if top is not None:
+            return top[0], top[2]
         per = len(profile.pieces)
         u = np.linspace(0.0, per, TIP_SCAN * per, endpoint=False)
         r = np.linalg.norm(profile.point(u), axis=-1)
@@ -103,6 +114,70 @@ class TwinScrewPair(ContactSearch, RotorPair):
                               bounds=(u[k] - h, u[k] + h), method="bounded",
                               options={"xatol": 1e-13})
         return float(res.x), -float(res.fun)
+
+    def _top(self, profile: TwinProfile):
+        """(u of its clockwise end, u of its counter-clockwise end, radius) of lobe 0's
+        arc of the largest radius, or None where the largest radius is a point (a tip).
+
+        On such an arc (the pin-cycloid female's land, on its pitch circle) every point
+        is a largest one, and rounding picked any of its samples for the tip: the land's
+        pin-side corner (u 2.009 on the seed-004 4/6, where its figures were checked) or
+        its trochoid-side one, a land's width away (u 2.999 with a male diameter of 101
+        or 102.4 mm, on the 5/6 and the 3/5).  The tip point sets the grooves' sectors
+        (:mod:`.ages`: at the trochoid-side corner a pocket straddled the ray and its
+        female part was booked a chamber older), where the tips cross the cusps (the
+        blow-hole's slots: none was booked) and the tip lines.  So the tip is the arc's
+        clockwise end, the first in u (the pin-side corner), and the arc's other end
+        is kept for telling which lobe a groove's corner on it belongs to
+        (:attr:`tip_spans`).  Both ends by bisection from the samples' brackets."""
+        return self._tops[0 if profile is self.male else 1]
+
+    @cached_property
+    def _tops(self):
+        return tuple(self._find_top(p) for p in (self.male, self.female))
+
+    def _find_top(self, profile: TwinProfile):
+        per = len(profile.pieces)
+        u = np.linspace(0.0, per, TIP_SCAN * per, endpoint=False)
+        r = np.linalg.norm(profile.point(u), axis=-1)
+        k = int(np.argmax(r))
+        tol = PLATEAU_TOL * self.gearing.centre_distance
+        m = len(u)
+        flat = r >= r[k] - tol
+        if flat.all() or not (flat[(k - 1) % m] or flat[(k + 1) % m]):
+            return None
+        rmax = float(r[k])
+
+        def at(i):  # sample i's parameter, counted on across lobe 0's ends
+            return float(u[i % m] + per * math.floor(i / m))
+
+        def holds(x):
+            return float(np.linalg.norm(profile.point(np.array([x]))[0])) >= rmax - tol
+
+        lo = hi = k
+        while flat[(lo - 1) % m]:
+            lo -= 1
+        while flat[(hi + 1) % m]:
+            hi += 1
+        start, _ = scalar.edge(holds, at(lo), at(lo - 1), PLATEAU_STEPS)
+        end, _ = scalar.edge(holds, at(hi), at(hi + 1), PLATEAU_STEPS)
+        shift = per * math.floor(start / per)  # (lobe 0's: the tips are numbered from it)
+        return start - shift, end - shift, rmax
+
+    @cached_property
+    def tip_spans(self) -> tuple[float, float]:
+        """Per rotor (male, female): the polar angle its lobe's arc of the largest
+        radius spans counter-clockwise from the tip point (:meth:`_top`; 0 for a tip)."""
+        out = []
+        for profile in (self.male, self.female):
+            top = None if self._land(profile) is not None else self._top(profile)
+            if top is None:
+                out.append(0.0)
+                continue
+            a, b = profile.point(np.array(top[:2]))
+            out.append(float(np.remainder(math.atan2(b[1], b[0]) - math.atan2(a[1], a[0]),
+                                          TWO_PI)))
+        return tuple(out)
 
     def _land(self, profile: TwinProfile):
         """(u of its middle, radius, (u_cw, u_ccw) of its corners) of lobe 0's land, or

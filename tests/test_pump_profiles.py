@@ -183,7 +183,9 @@ def test_bad_involute_pairs_are_named(args, word):
     ((1, 2, 0.110, 0.110), "lobes"),
     ((1, 1, 0.110, 0.100), "diameter"),
     ((1, 1, 0.070, 0.070), "pitch circle"),
-    ((1, 1, 0.160, 0.160), "outer radius"),
+    # (the tips reach 2 mm past the other axis: refused for every profile since session
+    # 37, before the trochoidal's own "outer radius" check)
+    ((1, 1, 0.160, 0.160), "too small for these diameters"),
 ])
 def test_bad_trochoidal_pairs_are_named(args, word):
     n1, n2, d1, d2 = args

@@ -112,6 +112,18 @@ class TabulatedFluid:
         j = np.clip(fu.astype(np.intp), 0, self.nu - 2)
         return bool(np.all(self.cells[i, j]))
 
+    def out_of_range(self, rho, u) -> str:
+        """Which way states outside :meth:`in_range` left the table (for the message)."""
+        fx = (np.log(np.asarray(rho, float)) - self.x0) / self.dx
+        fu = (np.asarray(u, float) - self.u0) / self.du
+        side = ("hotter than its hottest state (leakage heating the gas faster than the "
+                "discharge carries the heat away?)" if np.any(fu > self.nu - 1) else
+                "colder than its coldest state" if np.any(fu < 0) else
+                "denser than its densest state" if np.any(fx > self.nx - 1) else
+                "thinner than its thinnest state" if np.any(fx < 0) else
+                "in a cell CoolProp could not evaluate")
+        return f"{self.name} {side}"
+
     def u_from_rho_p(self, rho, p):
         """u at (rho, p) (starting states of the chambers: a guess, so the flash's value
         rather than the table's inverse, which differs by the interpolation error)."""

@@ -443,5 +443,8 @@ def _check_states(model, y):
             if np.any(V[live] <= 0):
                 raise IntegrationError("the liquid fills a chamber (hydraulic lock): lower "
                                        "the volume ratio or raise the gas volume fraction")
-        if not model.fluid.in_range(m[live] / V[live], U[live] / m[live]):
-            raise IntegrationError("chamber state left the range of the fluid's property table")
+        rho, u = m[live] / V[live], U[live] / m[live]
+        if not model.fluid.in_range(rho, u):
+            why = getattr(model.fluid, "out_of_range", None)
+            raise IntegrationError("chamber state left the range of the fluid's property table"
+                                   + (f": {why(rho, u)}" if why else ""))

@@ -5,6 +5,7 @@ problem, nothing written.  The cases are examples/refrigeration_r134a.toml (R134
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 
@@ -145,3 +146,15 @@ def test_a_dense_suction_squeezed_past_the_equation_of_state_is_named():
     with pytest.raises(CaseError, match=r"volume_ratio 2.1 squeezes the suction of CO2"):
         tabulated("CO2", 80e5, 130e5, 300.0, 300.0, 300.0, 2.1)
     assert tabulated("CO2", 80e5, 130e5, 300.0, 300.0, 300.0, 1.2).name == "CO2"
+
+
+def test_a_state_off_the_property_table_says_which_way_it_left():
+    # (the message said only that the state left the table; an ammonia or steam twin
+    # screw whose leakage runs the gas away hot gave that after a period)
+    f = tabulated("R134a", 3e5, 9e5, 285.0, 285.0, 285.0, 2.7)
+    rho_hi, u_hi = math.exp(f.x0 + f.dx * (f.nx - 1)), f.u0 + f.du * (f.nu - 1)
+    rho_mid, u_mid = math.exp(f.x0 + 0.5 * f.dx * (f.nx - 1)), f.u0 + 0.5 * f.du * (f.nu - 1)
+    assert "hotter" in f.out_of_range([rho_mid], [u_hi + f.du])
+    assert "colder" in f.out_of_range([rho_mid], [f.u0 - f.du])
+    assert "denser" in f.out_of_range([rho_hi * 1.5], [u_mid])
+    assert "thinner" in f.out_of_range([math.exp(f.x0) / 1.5], [u_mid])

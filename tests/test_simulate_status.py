@@ -89,3 +89,18 @@ def test_the_power_is_the_delivered_enthalpy_rise_plus_what_returns_to_suction(t
     total = rise + fig["suction_return_enthalpy_W"] - fig["heat_to_gas_W"]
     assert fig["suction_return_enthalpy_W"] > 0.05 * fig["indicated_power_W"]
     assert total == pytest.approx(fig["indicated_power_W"], rel=1e-5)
+
+
+def test_a_map_point_that_delivers_nothing_says_why_in_its_row(tmp_path):
+    # (its efficiencies are empty: map.csv showed nan with an empty message)
+    import tomllib
+
+    from rotorflow.geometry.summary import chamber_table
+    from rotorflow.workflow.case import load_case
+    from rotorflow.workflow.perf_map import run_point
+
+    case = load_case(CASES / "default.toml")
+    raw = tomllib.loads(DEFAULT.replace("speed_rpm = 3000", "speed_rpm = 100").replace(
+        "gap_um = 20", "gap_um = 100"))
+    row = run_point(chamber_table(case), raw, "test")
+    assert row["converged"] and "no delivery" in row["message"]

@@ -186,4 +186,7 @@ def run_point(table, raw: dict, where: str, fluid=None) -> dict:
         row["message"] = str(fig.get("message") or "cycle not converged")
     elif balances > BALANCE_LIMIT:
         row["message"] = f"balances {balances:.1e} above {BALANCE_LIMIT:g}"
+    elif fig.get("warning"):
+        # (a converged point that delivers nothing has empty efficiencies: say why)
+        row["message"] = str(fig["warning"])
     return row

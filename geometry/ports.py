@@ -126,10 +126,11 @@ def port_timing(machine: SweptMachine, volume_ratio: float,
     # Without internal compression and without a transport phase the suction closes and
     # the discharge opens at one angle, the volume maximum.
     if not (b < sc < do < death or (b < sc == do < death and volume_ratio == 1.0)):
+        life = machine.planar_life[1] - machine.planar_life[0] + machine.sweep.wrap
         raise CaseError(f"port timing out of order: suction closes at "
                         f"{math.degrees(sc - b):.1f} deg, discharge opens at "
                         f"{math.degrees(do - b):.1f} deg, the chamber dies at "
-                        f"{math.degrees(death - b):.1f} deg (since its birth)")
+                        f"{math.degrees(life):.1f} deg (since its birth)")
     return PortTiming(sc, do, death)
 
 

@@ -17,11 +17,19 @@ def build_machine(case, points_per_period: int | None = None) -> SweptMachine:
     """The case's pair swept by its sweep law (a wrap given as wrap_bar needs the
     chamber's planar life first), at the case's points per period unless given."""
     ppp = points_per_period or getattr(case, "points_per_period", POINTS_PER_PERIOD)
-    life = None
-    if case.wrap is None:
+    if case.wrap is not None:
+        return SweptMachine(case.pair, case.sweep(None), ppp)
+    if case.pair.life_on_nodes:
         sec = case.pair.section(ppp)
-        life = sec.phi_f - sec.phi_i
-    return SweptMachine(case.pair, case.sweep(life), ppp)
+        return SweptMachine(case.pair, case.sweep(sec.phi_f - sec.phi_i), ppp)
+    # The planar life between the section nodes (the twin screw's) does not depend on
+    # the sweep: found on a machine with the nodes' life, handed to the one with the wrap
+    # it sets (so that wrap_bar names one wrap at every resolution).
+    first = SweptMachine(case.pair, case.sweep(0.0), ppp)
+    birth, death = first.planar_life
+    m = SweptMachine(case.pair, case.sweep(death - birth), ppp)
+    m.__dict__["planar_life"] = (birth, death)  # (the cached property's slot)
+    return m
 
 
 def case_power_split(case, m: SweptMachine, driven: str = "auto"):

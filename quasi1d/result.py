@@ -96,6 +96,19 @@ def make_result(sol: CycleSolution) -> SimulationResult:
                             sol)
 
 
+def _gas_volume_ratio(model) -> float:
+    """The gas's own built-in volume ratio: a liquid drawn in or oil injected keeps its
+    volume, so the gas is squeezed further than the chamber (inf: no room left)."""
+    geo = model.geo
+    liquid = 0.0
+    if model.oil:
+        beta = model.op.gas_volume_fraction if model.inv_rho_liquid else 1.0
+        liquid = (model.liquid_ratio * beta * model.suc.rho * geo.v_trapped
+                  * model.inv_rho_liquid)
+    room = geo.v_discharge - liquid
+    return (geo.v_trapped - liquid) / room if room > 0.0 else math.inf
+
+
 def _extremes(fig: dict, chamber: dict, model) -> dict:
     """The chamber's highest pressure and temperature over its life, and warnings where
     they say the result is not a working machine's or lies beyond the fluid's model."""
@@ -104,8 +117,8 @@ def _extremes(fig: dict, chamber: dict, model) -> dict:
         return fig
     fig = {**fig, "chamber_pressure_max_Pa": float(np.max(p)),
            "chamber_temperature_max_K": float(np.max(T))}
-    geo, suc = model.geo, model.suc
-    built_in = suc.p * (geo.v_trapped / geo.v_discharge) ** suc.kappa
+    suc = model.suc
+    built_in = suc.p * _gas_volume_ratio(model) ** suc.kappa
     warn = [fig["warning"]] if fig.get("warning") else []
     limit = OVERPRESSURE * max(model.dis.p, built_in)
     if np.max(p) > limit:

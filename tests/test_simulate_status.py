@@ -66,7 +66,7 @@ def test_a_gas_hotter_than_its_fitted_properties_is_warned_of():
 
     model = SimpleNamespace(geo=SimpleNamespace(v_trapped=2.0, v_discharge=1.0),
                             suc=SimpleNamespace(p=1e5, kappa=1.4),
-                            dis=SimpleNamespace(p=3e5), fluid=dry_air())
+                            dis=SimpleNamespace(p=3e5), fluid=dry_air(), oil=False)
     chamber = {"p_Pa": np.array([1e5, 3e5]), "T_K": np.array([300.0, 3968.8])}
     fig = _extremes({"mass_flow_kg_s": 1.0}, chamber, model)
     assert fig["chamber_temperature_max_K"] == 3968.8
@@ -104,3 +104,13 @@ def test_a_map_point_that_delivers_nothing_says_why_in_its_row(tmp_path):
         "gap_um = 20", "gap_um = 100"))
     row = run_point(chamber_table(case), raw, "test")
     assert row["converged"] and "no delivery" in row["message"]
+
+
+def test_a_liquid_drawn_in_is_no_port_that_cannot_empty_the_chamber(tmp_path):
+    # 45 % water by volume: the gas is squeezed to 11.6 bar by its own built-in ratio
+    # (0.55 / (1 / 2 - 0.45) = 11), not by a port that fails (it was warned of as one)
+    text = DEFAULT.replace("speed_rpm = 3000", "speed_rpm = 3000\ngas_volume_fraction = 0.55"
+                           "\nliquid_density_kg_m3 = 998\nliquid_cp_J_kgK = 4180")
+    out, fig = _simulate(tmp_path, text)
+    assert out.returncode == 0, out.stderr
+    assert fig["chamber_pressure_max_Pa"] > 2.0 * 2.6e5 and "warning" not in fig

@@ -122,7 +122,8 @@ def _ports(asm: Assembly, solid, entry: dict):
             port_volume += float(region.area()) * depth
         solid = manifold3d.Manifold.batch_boolean([solid, *prisms], manifold3d.OpType.Add)
         b = m.birth_age  # (since the chamber's birth, as the case gives them)
+        birth, death = m.planar_life
         entry["port_timing_rad"] = {"suction_close": timing.suction_close - b,
                                     "discharge_open": timing.discharge_open - b,
-                                    "death": timing.death - b}
+                                    "death": death - birth + sw.wrap}
     return solid, port_volume

@@ -96,8 +96,11 @@ class RadialPort:
 
     bores: tuple[BoreWindow, ...]
     sweep: Sweep
-    phi_birth: float  # section angle of the chamber's birth (SectionChamber.phi_i)
+    phi_birth: float  # section angle of the table's first node (SectionChamber.phi_i)
     opening: float  # age at the discharge opening (PortTiming.discharge_open)
+    #: the chamber's birth as an age (SweptMachine.birth_age): the figures and messages
+    #: count from the birth, as every angle a user reads
+    birth_age: float = 0.0
 
     def edge(self, bore: BoreWindow, z):
         """u of the window's edge on ``bore`` at height(s) z (the window: edge to bottom)."""
@@ -129,14 +132,15 @@ def radial_port(machine, timing) -> RadialPort:
         raise CaseError("a radial discharge port is cut in cylindrical bores; this sweep "
                         "tapers (use discharge_port = \"axial\")")
     bores = tuple(_bore(pair, sec, r) for r in range(len(pair.rotors)))
-    port = RadialPort(bores, sweep, float(sec.phi_i), float(timing.discharge_open))
+    b0 = machine.birth_age
+    port = RadialPort(bores, sweep, float(sec.phi_i), float(timing.discharge_open), b0)
     if not any(port.has_window(b) for b in bores):
         latest = [port.latest_opening(b) for b in bores]
         ratio = machine.volume_max / float(machine.volume_at(sec.phi_i + max(latest))[0])
-        at = ", ".join(f"{math.degrees(a):.1f} deg ({b.rotor})"
+        at = ", ".join(f"{math.degrees(a - b0):.1f} deg ({b.rotor})"
                        for a, b in zip(latest, bores, strict=True))
         raise CaseError(
-            f"no radial discharge port can open at {math.degrees(port.opening):.1f} deg: at "
+            f"no radial discharge port can open at {math.degrees(port.opening - b0):.1f} deg: at "
             f"the discharge end the chamber's grooves reach the discharge-side cusp at {at}"
             f" (V_max / V = {ratio:.2f}), and no part of the bores is ahead of them after "
             "that; open the discharge earlier (lower volume_ratio or raise "
@@ -201,7 +205,8 @@ def _casing_points(pair, polygons, r: int) -> np.ndarray:
 # ------------------------------------------------------------------ areas against age
 def open_area(port: RadialPort, ages, bore: BoreWindow | None = None) -> np.ndarray:
     """The area of the chamber's opening on the bores inside the windows (m2) at every
-    age of ``ages`` (male angle since birth); one bore's, or both summed."""
+    age of ``ages`` (male angle from the table's first node, as the port timing's); one
+    bore's, or both summed."""
     ages = np.atleast_1d(np.asarray(ages, dtype=float))
     total = np.zeros(len(ages))
     for b in (port.bores if bore is None else (bore,)):
@@ -279,5 +284,6 @@ def port_figures(port: RadialPort) -> dict:
         out[f"radial_window_area_{b.rotor}_mm2"] = window_area(port, b) * 1e6
         out[f"radial_window_length_{b.rotor}_mm"] = length * 1e3
         out[f"radial_window_span_{b.rotor}_deg"] = math.degrees(span)
-        out[f"radial_latest_open_{b.rotor}_deg"] = math.degrees(port.latest_opening(b))
+        out[f"radial_latest_open_{b.rotor}_deg"] = math.degrees(port.latest_opening(b)
+                                                                 - port.birth_age)
     return out

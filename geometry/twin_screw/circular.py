@@ -37,8 +37,9 @@ def symmetric_circular_rack(gearing: Gearing, male_addendum: float, female_adden
     r_female = both - tip_radius
     if not 0.0 < tip_radius < both:
         raise CaseError(f"rack arc 'male tip': its radius {tip_radius * 1e3:.4g} mm must lie "
-                        f"between 0 and {both * 1e3:.4g} mm for the two rack circles to "
-                        f"meet tangentially over one pitch")
+                        f"strictly between 0 and {both * 1e3:.4g} mm for the two rack circles "
+                        f"to meet tangentially over one pitch (at {both * 1e3:.4g} mm the "
+                        f"female tip circle vanishes)")
     a_tip = male_addendum - tip_radius
     a_root = r_female - female_addendum
     joint = math.atan2(half, a_root - a_tip)  # from the male tip's centre, off the a axis

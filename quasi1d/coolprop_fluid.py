@@ -315,9 +315,7 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
 def _refuse_outside_the_equation(name, ps, pd, Ts) -> None:
     """A suction temperature or a pressure beyond the range of CoolProp's equation of
     state for ``name`` is refused (CoolProp extrapolates there without a word)."""
-    import CoolProp.CoolProp as CP
-
-    st = CP.AbstractState("HEOS", name)
+    st = _state(name)
     if Ts > st.Tmax():
         raise CaseError(f"T_suction_K = {Ts:g} is above the range of CoolProp's equation of "
                         f"state for {name} ({st.Tmax():.2f} K)")
@@ -331,7 +329,7 @@ def _refuse_squeezed_past_the_equation(name, ps, Ts, vr) -> None:
     CoolProp's equation of state along its isentrope is refused."""
     import CoolProp.CoolProp as CP
 
-    st = CP.AbstractState("HEOS", name)
+    st = _state(name)
     st.update(CP.PT_INPUTS, ps, Ts)
     rho, s = st.rhomass(), st.smass()
     try:
@@ -353,7 +351,7 @@ def _below_dew(name, p, T, T_dew) -> str:
 
     if T >= T_dew - SATURATION_T_TOLERANCE_K:
         return "saturated"
-    st = CP.AbstractState("HEOS", name)
+    st = _state(name)
     st.update(CP.PQ_INPUTS, p, 0.0)
     if T > st.T() + SATURATION_T_TOLERANCE_K:
         return f"inside its glide (bubble point {st.T():.2f} K)"

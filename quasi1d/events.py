@@ -115,13 +115,14 @@ def initial_state(model) -> np.ndarray:
     _refuse_wet_lock(model)
     beta = op.gas_volume_fraction if model.inv_rho_liquid else 1.0
     m_trap = beta * model.suc.rho * geo.v_trapped  # the gas trapped
+    ml_trap = trapped_liquid(model)
     for k in range(1, n):
         age = geo.birth + k * geo.period
         if age > geo.death:
             continue
         V = Vg = float(geo.volume(age))
         if model.oil and age >= geo.suction_close:
-            ml = model.liquid_ratio * m_trap
+            ml = ml_trap
             if age >= geo.discharge_open:
                 # gas and liquid leave together: a discharging chamber keeps its share of
                 # liquid (its whole trapped liquid would lock a small chamber near death)
@@ -154,6 +155,15 @@ def initial_state(model) -> np.ndarray:
         if model.vapour:
             y[humid.BLOCK * n + k] = rho * Vg * model.suc.w
     return y
+
+
+def trapped_liquid(model) -> float:
+    """The liquid (or oil) mass a chamber holds at suction closing: its inlet share of
+    the gas trapped (0 without one)."""
+    if not model.oil:
+        return 0.0
+    beta = model.op.gas_volume_fraction if model.inv_rho_liquid else 1.0
+    return model.liquid_ratio * beta * model.suc.rho * model.geo.v_trapped
 
 
 def _refuse_wet_lock(model) -> None:

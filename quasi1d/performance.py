@@ -117,9 +117,6 @@ def figures(sol: CycleSolution) -> dict:
         out["discharge_vapour_fraction"] = float(w_dis[0]) if w_dis else None
     if not sol.converged:
         out["message"] = sol.message
-    if not delivered:
-        out["warning"] = ("no delivery: the net flow runs from the discharge to the suction "
-                          "(leakage and backflow exceed what the chambers carry)")
     return out
 
 

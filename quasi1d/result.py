@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .cycle import CycleSolution
+from .events import trapped_liquid
 from .performance import figures
 
 
@@ -100,26 +101,26 @@ def _gas_volume_ratio(model) -> float:
     """The gas's own built-in volume ratio: a liquid drawn in or oil injected keeps its
     volume, so the gas is squeezed further than the chamber (inf: no room left)."""
     geo = model.geo
-    liquid = 0.0
-    if model.oil:
-        beta = model.op.gas_volume_fraction if model.inv_rho_liquid else 1.0
-        liquid = (model.liquid_ratio * beta * model.suc.rho * geo.v_trapped
-                  * model.inv_rho_liquid)
+    liquid = trapped_liquid(model) * model.inv_rho_liquid if model.oil else 0.0
     room = geo.v_discharge - liquid
     return (geo.v_trapped - liquid) / room if room > 0.0 else math.inf
 
 
 def _extremes(fig: dict, chamber: dict, model) -> dict:
     """The chamber's highest pressure and temperature over its life, and warnings where
-    they say the result is not a working machine's or lies beyond the fluid's model."""
+    the result is not a working machine's or lies beyond the fluid's model."""
     p, T = chamber["p_Pa"], chamber["T_K"]
-    if not len(p):
-        return fig
-    fig = {**fig, "chamber_pressure_max_Pa": float(np.max(p)),
-           "chamber_temperature_max_K": float(np.max(T))}
+    if len(p):
+        fig = {**fig, "chamber_pressure_max_Pa": float(np.max(p)),
+               "chamber_temperature_max_K": float(np.max(T))}
+    else:
+        p = T = np.zeros(1)  # (no trace: nothing to warn of but the delivery)
     suc = model.suc
     built_in = suc.p * _gas_volume_ratio(model) ** suc.kappa
-    warn = [fig["warning"]] if fig.get("warning") else []
+    warn = []
+    if not fig["mass_flow_kg_s"] > 0.0:
+        warn.append("no delivery: the net flow runs from the discharge to the suction "
+                    "(leakage and backflow exceed what the chambers carry)")
     limit = OVERPRESSURE * max(model.dis.p, built_in)
     if np.max(p) > limit:
         warn.append(f"the chamber reaches {np.max(p) / 1e5:.4g} bar, over {OVERPRESSURE:g} "

@@ -71,7 +71,8 @@ def test_a_gas_hotter_than_its_fitted_properties_is_warned_of():
     fig = _extremes({"mass_flow_kg_s": 1.0}, chamber, model)
     assert fig["chamber_temperature_max_K"] == 3968.8
     assert f"above the {DRY_AIR_T_FITTED_MAX:.0f} K" in fig["warning"]
-    cool = _extremes({}, {"p_Pa": chamber["p_Pa"], "T_K": np.array([300.0, 450.0])}, model)
+    cool = _extremes({"mass_flow_kg_s": 1.0},
+                     {"p_Pa": chamber["p_Pa"], "T_K": np.array([300.0, 450.0])}, model)
     assert "warning" not in cool
 
 

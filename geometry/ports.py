@@ -74,7 +74,8 @@ SECTION_SPACING = 1e-4
 EPS_AGE = 1e-9
 #: Halvings of a section step that locate the planar section's birth and death
 #: (:func:`planar_life`): 1/4096 of a step, 3.2e-5 rad at 24 points per period on a 1-1
-#: pump, for 24 polygons-only section cuts (~0.2 s) on a machine with a transport phase.
+#: pump, for 24 polygons-only section cuts (0.13-0.2 s) on every twin-screw machine (the
+#: origin of the angles a case gives and reads; a pump's transport plateau).
 LIFE_BISECTIONS = 12
 #: How far the section table's zero nodes and a seal's nodes next to the fluid may
 #: carry the nodes' life past the fluid's, in curve steps (two section steps each): up

@@ -40,16 +40,17 @@ from scipy.interpolate import CubicSpline
 from rotorflow.errors import CaseError
 
 from ..curves import closest, sample
+from .cutter_check import interference
+from .cutter_corners import CORNER_DEG, corner_limits, trim_swallowtails
 from .tooth_space import BISECT, tooth_space
 
 #: Samples of the bracket scan of the contact equations (bisected BISECT times after it).
 SCAN = 801
+#: A root where the rotor's normal is within this angle (radians) of the tool axis is
+#: no contact: the condition vanishes there because the normal never meets the axis.
+PARALLEL = 1e-9
 #: Smallest spacing of written tool points, in tolerances.
 MIN_SPACING = 0.01
-#: Tool angles scanned per radian when looking for interference, either side of the
-#: plane through both axes as far as a tool point can come within the rotor's radius.
-INTERFERENCE_DENSITY = 100
-
 
 @dataclass(frozen=True)
 class CutterSetup:
@@ -201,7 +202,8 @@ def form_cutter(curve, setup: CutterSetup, tol: float, space=None) -> Cutter:
     us = us - curve.n * np.floor((us - lo) / curve.n)  # into [lo, lo + n)
     u = np.sort(us[(us >= lo) & (us <= hi)])
     u = np.unique(np.concatenate([[lo], u, [hi]]))
-    p, dp = prof.point(u), prof.derivative(u)
+    u, dp, corners = corner_limits(prof, u, lo, hi)
+    p = prof.point(u)
     o, e = setup.origin, setup.axis
     k = setup.k
     radius = float(np.linalg.norm(p, axis=-1).max())
@@ -226,8 +228,19 @@ def form_cutter(curve, setup: CutterSetup, tol: float, space=None) -> Cutter:
         n = np.cross(Pu, Pz)
         ne = np.cross(n, e)
         lam = -np.sum(np.cross(P - o, e) * ne, -1) / np.maximum(np.sum(ne * ne, -1), 1e-300)
-        valid[:, j] = lam > 0.0
+        # (a normal along the tool axis zeroes the condition without meeting the axis)
+        along = np.sum(ne * ne, -1) <= PARALLEL ** 2 * np.sum(n * n, -1)
+        valid[:, j] = (lam > 0.0) & ~along
     z = _continued_zero(roots, valid, int(np.argmin(np.abs(u - root))))
+    # A corner's flank end, or a tooth space's end, that meets no tool circle leaves the
+    # corner to its other flank's point, the end to the flank's next (the trochoidal
+    # pump male: its tips' normals run along the tool axis).
+    ends = np.array([0, len(u) - 1])
+    lost = np.union1d(corners[np.isnan(z[corners])], ends[np.isnan(z[ends])])
+    if len(lost):
+        u, p, dp, z = (np.delete(x, lost, axis=0) for x in (u, p, dp, z))
+        kept = np.setdiff1d(corners, lost)
+        corners = kept - np.searchsorted(lost, kept)
     if np.isnan(z).any():
         i = int(np.nonzero(np.isnan(z))[0][0])
         raise CaseError(
@@ -241,6 +254,8 @@ def form_cutter(curve, setup: CutterSetup, tol: float, space=None) -> Cutter:
     if not (R > 0.0).all():
         raise CaseError(f"the form cutter's axis passes through the {curve.name} rotor: "
                         "increase cutter_centre_distance_mm")
+    h, R, u, *xyz = trim_swallowtails(corners, h, R, u, *P.T)
+    P = np.column_stack(xyz)
     # Near the sigma_bar = 1 point the flank barely moves with u: drop tool points
     # closer than MIN_SPACING * tol to the last one kept (they carry no shape).
     keep = [0]
@@ -253,11 +268,37 @@ def form_cutter(curve, setup: CutterSetup, tol: float, space=None) -> Cutter:
     return Cutter(setup, u[keep], P[keep], h[keep], R[keep], prof.turn, root)
 
 
+class _Broken:
+    """A cubic spline by chord length, broken at the given nodes (value and slope)."""
+
+    def __init__(self, s, y, breaks):
+        self.edges = s[breaks]
+        self.pieces = [CubicSpline(s[a:b + 1], y[a:b + 1])
+                       for a, b in zip(breaks[:-1], breaks[1:], strict=True)]
+
+    def __call__(self, s, nu=0):
+        s = np.asarray(s, dtype=float)
+        j = np.clip(np.searchsorted(self.edges, s, side="right") - 1, 0, len(self.pieces) - 1)
+        out = np.empty(s.shape)
+        for k in np.unique(j):
+            out[j == k] = self.pieces[k](s[j == k], nu)
+        return out
+
+
 def _meridian(axial, radius):
-    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(axial), np.diff(radius)))])
+    """(s, h(s), R(s)): the tool profile through its points by chord length, a cubic
+    spline between its corners (a chord turning by more than CORNER_DEG from the last:
+    a rotor's concave corner, the 4/6 pin-cycloid male's at its root, is a corner of
+    the tool, which a spline through it overshoots by tens of micrometres)."""
+    d = np.column_stack([np.diff(axial), np.diff(radius)])
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(d[:, 0], d[:, 1]))])
     if not np.all(np.diff(s) > 0.0):
         raise CaseError("the form-cutter profile has repeated points")
-    return s, CubicSpline(s, axial), CubicSpline(s, radius)
+    turn = np.arctan2(d[:-1, 0] * d[1:, 1] - d[:-1, 1] * d[1:, 0],
+                      np.sum(d[:-1] * d[1:], -1))
+    corners = np.nonzero(np.abs(turn) > math.radians(CORNER_DEG))[0] + 1
+    breaks = np.unique(np.concatenate([[0], corners, [len(s) - 1]]))
+    return s, _Broken(s, axial, breaks), _Broken(s, radius, breaks)
 
 
 def _frame(setup: CutterSetup):
@@ -328,39 +369,12 @@ def round_trip(curve, cutter: Cutter, axial=None, radius=None) -> dict:
     s_nodes = _meridian(axial, radius)[0]
     u0 = np.interp(s, s_nodes, cutter.u)
     _, dist, _ = closest(prof, q, u0, iterations=12)
-    return {"round_trip_max_m": float(dist.max()), "round_trip_points": int(len(q)),
-            "interference_m": interference(prof, cutter.setup, axial, radius)}
-
-
-def interference(prof, setup: CutterSetup, axial, radius) -> float:
-    """Deepest penetration of the tool surface's screw image into the rotor (>= 0)."""
-    from matplotlib.path import Path as MplPath
-
-    s_nodes, hs, Rs = _meridian(axial, radius)
-    s = np.linspace(0.0, s_nodes[-1], 4 * len(s_nodes))
-    u = sample(prof.curve, 1e-7)
-    poly = prof.point(u)
-    # A tool point at angle psi lies at least C - R cos(psi) from the rotor's axis: the
-    # angles where that exceeds the rotor's radius cannot cut it.
-    reach = (setup.centre_distance - float(np.linalg.norm(poly, axis=-1).max())) \
-        / float(np.max(radius))
-    span = math.acos(min(1.0, max(-1.0, reach))) + 0.05
-    psi = np.linspace(-span, span, max(3, int(2 * span * INTERFERENCE_DENSITY) | 1))
-    S, PSI = np.meshgrid(s, psi)
-    T, _ = _tool_points(setup, hs(S), Rs(S), PSI)
-    q = _to_transverse(T, setup.k).reshape(-1, 2)
-    near = np.linalg.norm(q, axis=-1) <= np.linalg.norm(poly, axis=-1).max()
-    q = q[near]
-    if not len(q):
-        return 0.0
-    inside = MplPath(poly).contains_points(q)
-    if not inside.any():
-        return 0.0
-    from scipy.spatial import cKDTree
-
-    _, i = cKDTree(poly).query(q[inside])
-    _, dist, _ = closest(prof, q[inside], u[i], iterations=12)
-    return float(dist.max())
+    depth, where = interference(prof, cutter.setup, _meridian(axial, radius))
+    out = {"round_trip_max_m": float(dist.max()), "round_trip_points": int(len(q)),
+           "interference_m": depth}
+    if where is not None:
+        out["interference_at_m"] = [float(x) for x in where]
+    return out
 
 
 def default_setup(pair, sweep, angle: float | None, centre: float | None,

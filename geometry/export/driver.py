@@ -334,8 +334,10 @@ def _round_trip(asm: Assembly, part: Part, cut, axial=None, radius=None) -> dict
         raise CaseError(f"the form cutter regenerates the {name} rotor only to "
                         f"{rt['round_trip_max_m'] * 1e6:.3g} um (> tolerance_um): {change}")
     if rt["interference_m"] > tol:
+        x, y = rt["interference_at_m"]
         raise CaseError(f"the form cutter cuts {rt['interference_m'] * 1e6:.3g} um into the "
-                        f"{name} rotor: {change}")
+                        f"{name} rotor (at radius {math.hypot(x, y) * 1e3:.4g} mm of its "
+                        f"section): {change}")
     return rt
 
 

@@ -1,0 +1,127 @@
+"""Whether a disc cutter cuts into its rotor anywhere (:mod:`.cutter`'s round trip).
+
+The tool surface is screwed back into the rotor's transverse plane (a tool point at
+height z lands where the helix turns it, :func:`.cutter._to_transverse`) and each image
+point's signed distance to the profile is measured (negative inside the rotor).
+
+The distances are to the profile's polygon (chord error POLYGON_TOL), from the nearest
+vertex's two edges, signed by the nearer edge's normal or, at a vertex, by both edges'.
+Until 2026-11-30 they were Newton feet on the curve from the nearest vertex, which at a
+corner can converge on the wrong piece: the 4/6 pin-cycloid female's tool circles
+graze its flank within 0.1 um next to its tip corner, and the feet found on the land
+beside it made that 20 to 56 um of "interference", or none, as the setting angle
+moved by a quarter of a degree.
+
+Each tool circle is sampled on a grid, and every grid interval that could hide a cut is
+searched for its least distance: the distance changes by at most the distance moved,
+so an interval whose ends lie d_a and d_b outside, with chord l between their images,
+holds no inside point if d_a + d_b > l.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..curves import sample
+
+#: Tool angles per radian of the grid, either side of the plane through both axes.
+INTERFERENCE_DENSITY = 100
+#: Tool circles sampled per interval between written tool points (and the points).
+CIRCLES_PER_INTERVAL = 4
+#: Golden-section steps of a grid interval's least distance (0.618^32: 2e-7 of it).
+SEARCH_STEPS = 32
+#: Chordal tolerance of the profile polygon [m].
+POLYGON_TOL = 1e-7
+GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
+
+
+def interference(prof, setup, meridian) -> tuple[float, np.ndarray | None]:
+    """(depth, where): the deepest point of the tool surface inside the rotor (>= 0)
+    and that point in the turned rotor frame (None if it cuts nowhere).  ``meridian``
+    is (s_nodes, h(s), R(s))."""
+    from .cutter import _to_transverse, _tool_points
+
+    s_nodes, hs, Rs = meridian
+    s = np.concatenate([np.linspace(a, b, CIRCLES_PER_INTERVAL, endpoint=False)
+                        for a, b in zip(s_nodes[:-1], s_nodes[1:], strict=True)]
+                       + [s_nodes[-1:]])
+    dist = _PolygonDistance(prof.point(sample(prof.curve, POLYGON_TOL)))
+    # A tool point at angle psi lies at least C - R cos(psi) from the rotor's axis: the
+    # angles where that exceeds the rotor's radius cannot cut it.
+    reach = (setup.centre_distance - dist.r_max) / float(np.max(Rs(s)))
+    span = math.acos(min(1.0, max(-1.0, reach))) + 0.05
+    psi = np.linspace(-span, span, max(3, int(2 * span * INTERFERENCE_DENSITY) | 1))
+
+    def signed(ss, pp):
+        T, _ = _tool_points(setup, hs(ss), Rs(ss), pp)
+        q = _to_transverse(T, setup.k)
+        return q, dist(q)
+
+    S, PSI = np.meshgrid(s, psi, indexing="ij")
+    q, d = signed(S, PSI)
+    k = np.unravel_index(np.argmin(d), d.shape)
+    best = [float(d[k]), q[k]]
+    hide = d[:, :-1] + d[:, 1:] < np.linalg.norm(q[:, 1:] - q[:, :-1], axis=-1) + 1e-9
+    if hide.any():
+        ss, a, b = S[:, :-1][hide], PSI[:, :-1][hide], PSI[:, 1:][hide]
+        c, e = b - GOLDEN * (b - a), a + GOLDEN * (b - a)
+        fc, fe = signed(ss, c)[1], signed(ss, e)[1]
+        for _ in range(SEARCH_STEPS):
+            left = fc < fe  # the least lies in [a, e]: e becomes c
+            a, b = np.where(left, a, c), np.where(left, e, b)
+            c, e, fc, fe = (np.where(left, b - GOLDEN * (b - a), e),
+                            np.where(left, c, a + GOLDEN * (b - a)),
+                            np.where(left, np.nan, fe), np.where(left, fc, np.nan))
+            fx = signed(ss, np.where(left, c, e))[1]
+            fc, fe = np.where(left, fx, fc), np.where(left, fe, fx)
+        qm, dm = signed(ss, 0.5 * (a + b))
+        j = int(np.argmin(dm))
+        if dm[j] < best[0]:
+            best = [float(dm[j]), qm[j]]
+    return (0.0, None) if best[0] >= 0.0 else (-best[0], best[1])
+
+
+class _PolygonDistance:
+    """Signed distance to a closed counter-clockwise polygon (negative inside), from
+    the nearest vertex's two edges: exact wherever the nearest point of the polygon
+    lies on them, which holds within half an edge of the polygon."""
+
+    def __init__(self, poly):
+        from scipy.spatial import cKDTree
+
+        self.p = np.asarray(poly, dtype=float)
+        self.r_max = float(np.linalg.norm(self.p, axis=-1).max())
+        self.tree = cKDTree(self.p)
+        e = np.roll(self.p, -1, axis=0) - self.p  # edge i: vertex i to i + 1
+        self.e = e
+        self.n = np.column_stack([e[:, 1], -e[:, 0]]) / np.linalg.norm(e, axis=-1)[:, None]
+
+    def __call__(self, q):
+        shape = q.shape[:-1]
+        q = q.reshape(-1, 2)
+        out = np.linalg.norm(q, axis=-1) - self.r_max  # outside the circle: a bound
+        near = out <= 0.0
+        if near.any():
+            out[near] = self._near(q[near])
+        return out.reshape(shape)
+
+    def _near(self, q):
+        n = len(self.p)
+        _, i = self.tree.query(q)
+        best = np.full(len(q), np.inf)
+        sign = np.ones(len(q))
+        for j in ((i - 1) % n, i):  # the edges before and after vertex i
+            a, e = self.p[j], self.e[j]
+            t = np.clip(np.sum((q - a) * e, -1) / np.sum(e * e, -1), 0.0, 1.0)
+            r = q - (a + t[:, None] * e)
+            dd = np.linalg.norm(r, axis=-1)
+            # on the edge, its normal; at an end, both edges' there (the vertex's)
+            v = np.where(t >= 1.0, (j + 1) % n, j)
+            normal = np.where(((t > 0.0) & (t < 1.0))[:, None], self.n[j],
+                              self.n[(v - 1) % n] + self.n[v])
+            closer = dd < best
+            best = np.where(closer, dd, best)
+            sign = np.where(closer, np.sign(np.sum(r * normal, -1)), sign)
+        return np.where(sign < 0.0, -best, best)

@@ -101,19 +101,54 @@ def signed_area(poly: np.ndarray) -> float:
 GAP_NEAREST = 16
 
 
+class PolygonDistance:
+    """Distances to one closed counter-clockwise polygon from many points: to the
+    segments at the ``nearest`` vertices closest to each point (edges short against the
+    distances measured), signed by the nearest feature (negative inside): the nearest
+    segment's normal, or at a vertex both its segments' (exact in 2D, and cheap: no
+    point-in-polygon test)."""
+
+    def __init__(self, poly, nearest: int = GAP_NEAREST):
+        from scipy.spatial import cKDTree
+
+        self.poly = np.asarray(poly, dtype=float)
+        self.nearest = min(nearest, len(self.poly))
+        self.tree = cKDTree(self.poly)
+        e = np.roll(self.poly, -1, axis=0) - self.poly  # segment i: vertex i to i + 1
+        self.normal = np.column_stack([e[:, 1], -e[:, 0]]) / np.linalg.norm(e, axis=-1)[:, None]
+
+    def nearest_points(self, points):
+        """(distance, sign, vertex): the unsigned distance, the nearest feature's sign
+        (+1 outside) and the vertex nearest each point."""
+        n, poly = len(self.poly), self.poly
+        _, k = self.tree.query(points, self.nearest)
+        k = k.reshape(len(points), -1)
+        idx = np.concatenate([k, k - 1], axis=1) % n
+        a, b = poly[idx], poly[(idx + 1) % n]
+        ab, ap = b - a, points[:, None, :] - a
+        t = np.clip(np.sum(ap * ab, -1) / np.sum(ab * ab, -1), 0.0, 1.0)
+        r = ap - t[..., None] * ab
+        d = np.linalg.norm(r, axis=-1)
+        j = np.argmin(d, axis=1)
+        rows = np.arange(len(points))
+        seg, tj, rj = idx[rows, j], t[rows, j], r[rows, j]
+        at = np.where(tj >= 1.0, (seg + 1) % n, seg)  # the vertex, where it ends there
+        feature = np.where(((tj > 0.0) & (tj < 1.0))[:, None], self.normal[seg],
+                           self.normal[(at - 1) % n] + self.normal[at])
+        sign = np.where(np.sum(rj * feature, -1) < 0.0, -1.0, 1.0)
+        return d[rows, j], sign, k[:, 0]
+
+    def __call__(self, points):
+        d, sign, _ = self.nearest_points(points)
+        return sign * d
+
+
 def polygon_gap(points, poly, nearest: int = GAP_NEAREST):
     """Signed distance of each point to the closed polygon (negative inside), by
-    point-to-segment distances and an even-odd inside test: no curve, no Newton, so the
-    sign stays right next to a sharp corner (where a sign taken from a curve's normal is
-    ambiguous).  The closest segment must have a vertex among the ``nearest`` vertices
-    closest to the point (edges short against the distances measured)."""
+    point-to-segment distances (:class:`PolygonDistance`) and an even-odd inside test:
+    no curve, no Newton, so the sign stays right next to a sharp corner (where a sign
+    taken from a curve's normal is ambiguous)."""
     from matplotlib.path import Path
-    from scipy.spatial import cKDTree
 
-    _, k = cKDTree(poly).query(points, nearest)
-    idx = np.concatenate([k, k - 1], axis=1) % len(poly)
-    a, b = poly[idx], poly[(idx + 1) % len(poly)]
-    ab, ap = b - a, points[:, None, :] - a
-    t = np.clip(np.sum(ap * ab, -1) / np.sum(ab * ab, -1), 0.0, 1.0)
-    d = np.linalg.norm(ap - t[..., None] * ab, axis=-1).min(axis=1)
+    d, _, _ = PolygonDistance(poly, nearest).nearest_points(points)
     return np.where(Path(poly).contains_points(points), -d, d)

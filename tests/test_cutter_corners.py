@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from rotorflow.geometry.export.cutter import CutterSetup, _Turned, form_cutter, round_trip
-from rotorflow.geometry.export.cutter_check import _PolygonDistance
 from rotorflow.geometry.export.driver import _setup, check
 from rotorflow.geometry.export.settings import Export
+from rotorflow.geometry.polygons import PolygonDistance
 from rotorflow.workflow.case import load_case
 
 from .conftest import CASES
@@ -96,13 +96,11 @@ def test_a_straight_rotor_tool_is_its_profile_corners_included(pin_cycloid):
 ])
 def test_polygon_distance_is_signed_and_exact(point, expected):
     """An L (unit squares at (0, 0), (1, 0), (0, 1)) drawn with many vertices: signed
-    distances (negative inside) by hand, at and beside its convex and concave corners
-    (all within the L's circle about the origin, beyond which the distance is the
-    circle's, a lower bound)."""
+    distances (negative inside) by hand, at and beside its convex and concave corners."""
     corners = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], dtype=float)
     ring = np.concatenate([np.linspace(a, b, 50, endpoint=False)
                            for a, b in zip(corners, np.roll(corners, -1, axis=0), strict=True)])
-    got = _PolygonDistance(ring)(np.array([point]))[0]
+    got = PolygonDistance(ring)(np.array([point]))[0]
     assert got == pytest.approx(expected, abs=1e-12)
 
 

@@ -4,8 +4,8 @@ The tool surface is screwed back into the rotor's transverse plane (a tool point
 height z lands where the helix turns it, :func:`.cutter._to_transverse`) and each image
 point's signed distance to the profile is measured (negative inside the rotor).
 
-The distances are to the profile's polygon (chord error POLYGON_TOL), from the nearest
-vertex's two edges, signed by the nearer edge's normal or, at a vertex, by both edges'.
+The distances are to the profile's polygon (chord error POLYGON_TOL), signed by the
+nearest feature (:class:`..polygons.PolygonDistance`).
 Until 2026-11-30 they were Newton feet on the curve from the nearest vertex, which at a
 corner can converge on the wrong piece: the 4/6 pin-cycloid female's tool circles
 graze its flank within 0.1 um next to its tip corner, and the feet found on the land
@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from ..curves import sample
+from ..polygons import PolygonDistance
 
 #: Tool angles per radian of the grid, either side of the plane through both axes.
 INTERFERENCE_DENSITY = 100
@@ -47,7 +48,7 @@ def interference(prof, setup, meridian) -> tuple[float, np.ndarray | None]:
     s = np.concatenate([np.linspace(a, b, CIRCLES_PER_INTERVAL, endpoint=False)
                         for a, b in zip(s_nodes[:-1], s_nodes[1:], strict=True)]
                        + [s_nodes[-1:]])
-    dist = _PolygonDistance(prof.point(sample(prof.curve, POLYGON_TOL)))
+    dist = _Distance(prof.point(sample(prof.curve, POLYGON_TOL)))
     # A tool point at angle psi lies at least C - R cos(psi) from the rotor's axis: the
     # angles where that exceeds the rotor's radius cannot cut it.
     reach = (setup.centre_distance - dist.r_max) / float(np.max(Rs(s)))
@@ -83,45 +84,19 @@ def interference(prof, setup, meridian) -> tuple[float, np.ndarray | None]:
     return (0.0, None) if best[0] >= 0.0 else (-best[0], best[1])
 
 
-class _PolygonDistance:
-    """Signed distance to a closed counter-clockwise polygon (negative inside), from
-    the nearest vertex's two edges: exact wherever the nearest point of the polygon
-    lies on them, which holds within half an edge of the polygon."""
+class _Distance(PolygonDistance):
+    """The profile polygon's signed distance, beyond the rotor's circle the circle's (a
+    lower bound: most of a tool circle's images lie there)."""
 
     def __init__(self, poly):
-        from scipy.spatial import cKDTree
-
-        self.p = np.asarray(poly, dtype=float)
-        self.r_max = float(np.linalg.norm(self.p, axis=-1).max())
-        self.tree = cKDTree(self.p)
-        e = np.roll(self.p, -1, axis=0) - self.p  # edge i: vertex i to i + 1
-        self.e = e
-        self.n = np.column_stack([e[:, 1], -e[:, 0]]) / np.linalg.norm(e, axis=-1)[:, None]
+        super().__init__(poly, nearest=2)
+        self.r_max = float(np.linalg.norm(self.poly, axis=-1).max())
 
     def __call__(self, q):
         shape = q.shape[:-1]
         q = q.reshape(-1, 2)
-        out = np.linalg.norm(q, axis=-1) - self.r_max  # outside the circle: a bound
+        out = np.linalg.norm(q, axis=-1) - self.r_max
         near = out <= 0.0
         if near.any():
-            out[near] = self._near(q[near])
+            out[near] = super().__call__(q[near])
         return out.reshape(shape)
-
-    def _near(self, q):
-        n = len(self.p)
-        _, i = self.tree.query(q)
-        best = np.full(len(q), np.inf)
-        sign = np.ones(len(q))
-        for j in ((i - 1) % n, i):  # the edges before and after vertex i
-            a, e = self.p[j], self.e[j]
-            t = np.clip(np.sum((q - a) * e, -1) / np.sum(e * e, -1), 0.0, 1.0)
-            r = q - (a + t[:, None] * e)
-            dd = np.linalg.norm(r, axis=-1)
-            # on the edge, its normal; at an end, both edges' there (the vertex's)
-            v = np.where(t >= 1.0, (j + 1) % n, j)
-            normal = np.where(((t > 0.0) & (t < 1.0))[:, None], self.n[j],
-                              self.n[(v - 1) % n] + self.n[v])
-            closer = dd < best
-            best = np.where(closer, dd, best)
-            sign = np.where(closer, np.sign(np.sum(r * normal, -1)), sign)
-        return np.where(sign < 0.0, -best, best)

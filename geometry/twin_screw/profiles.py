@@ -17,13 +17,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from rotorflow.errors import CaseError
 
 from ..curves import PieceCurve, closest, sample
 from ..planar import TWO_PI, rotate
-from ..polygons import rings_intersections
+from ..polygons import PolygonDistance, rings_intersections
 from .meshing import Gearing, RackGenerated, check_no_undercut
 
 #: Rack arcs must join end to start within 1e-9 of the pitch (a rounding slip of typed
@@ -106,22 +105,26 @@ def signed_gap(male, female, gearing: Gearing, thetas, tol: float):
     um = sample(male, tol)
     pm = male.point(um)
     uf = sample(female, tol)
-    tree = cKDTree(female.point(uf))
+    polygon = PolygonDistance(female.point(uf), nearest=2)
     reach = female.radius_max + tol  # male points farther from O2 cannot touch
     gaps, where = [], []
     for theta in np.atleast_1d(thetas):
-        # male points in the female frame, foot points on the true female curve
+        # male points in the female frame
         x = rotate(rotate(pm, theta) - gearing.female_axis, theta * gearing.r1 / gearing.r2)
-        near = np.linalg.norm(x, axis=-1) <= reach
-        if not near.any():
+        near = np.nonzero(np.linalg.norm(x, axis=-1) <= reach)[0]
+        if not len(near):
             gaps.append(np.inf)
             where.append(np.nan)
             continue
-        _, k = tree.query(x[near])
+        # The polygon lies within tol of the curve: only points within 2 tol of the
+        # polygon's least gap can hold the curve's; their feet on the true curve.
+        d, sign, k = polygon.nearest_points(x[near])
+        d = sign * d
+        near, k = near[d <= d.min() + 2.0 * tol], k[d <= d.min() + 2.0 * tol]
         _, _, signed = closest(female, x[near], uf[k])
         i = int(np.argmin(signed))
         gaps.append(float(signed[i]))
-        where.append(float(um[near][i]))
+        where.append(float(um[near[i]]))
     return np.array(gaps), np.array(where)
 
 

@@ -31,7 +31,7 @@ from rotorflow.errors import CaseError
 
 from ..curves import sample
 from ..planar import TWO_PI, rotate
-from ..polygons import polygon_gap
+from ..polygons import PolygonDistance
 from .meshing import Gearing
 from .profiles import CHECK_ANGLES, CHECK_TOL, OVERLAP_TOL
 
@@ -145,12 +145,15 @@ def check_no_overlap(male, female, gearing: Gearing) -> None:
     pf = female.point(sample(female, CHECK_TOL * c, max_step=MAX_EDGE * c))
     # polygons lie inside their curves by up to the chordal tolerance on convex parts
     allowed = OVERLAP_TOL * c + 2.0 * CHECK_TOL * c
+    # each polygon's points in the other's own frame: one search tree per polygon
+    to_female, to_male = PolygonDistance(pf, NEAREST), PolygonDistance(pm, NEAREST)
     for theta in np.linspace(0.0, TWO_PI / male.lobes, CHECK_ANGLES, endpoint=False):
-        m = rotate(pm, theta)
-        f = rotate(pf, -theta * gearing.r1 / gearing.r2) + gearing.female_axis
-        near = np.linalg.norm(m - gearing.female_axis, axis=-1) <= female.radius_max + allowed
+        turn = theta * gearing.r1 / gearing.r2
+        m = rotate(rotate(pm, theta) - gearing.female_axis, turn)
+        f = rotate(rotate(pf, -turn) + gearing.female_axis, -theta)
+        near = np.linalg.norm(m, axis=-1) <= female.radius_max + allowed
         local = np.linalg.norm(f, axis=-1) <= male.radius_max + allowed
-        gm, gf = polygon_gap(m[near], f, NEAREST), polygon_gap(f[local], m, NEAREST)
+        gm, gf = to_female(m[near]), to_male(f[local])
         if min(gm.min(initial=np.inf), gf.min(initial=np.inf)) < -allowed:
             i = int(np.argmin(gm)) if gm.size else 0
             raise CaseError(f"interference: at male angle {np.degrees(theta):.3f} deg the "

@@ -223,16 +223,19 @@ def test_a_late_stage_refusal_stops_the_run_before_any_stage_writes(tmp_path, ed
 
 
 def test_a_disc_cutter_that_cannot_be_made_stops_the_run_before_any_stage_writes(tmp_path):
-    # The 4/6 pin-cycloid male's tooth space: the tool's outermost point (the male's
-    # root) envelopes nothing.  The run wrote the geometry, table, quasi-1D and render
-    # stages before the solids stage found it.
+    # The 4/6 pin-cycloid male's pitch circle is its root, so its default setting angle
+    # (the helix angle there, 54.39 deg) is the least that reaches its whole flank: at 53.4
+    # no tool circle meets the flank near the root.  (Until session 38 the default itself
+    # failed, on a defect.)  The run wrote the geometry, table, quasi-1D and render stages
+    # before the solids stage found such a tool.
     case = tmp_path / "cutter.toml"
     case.write_text((CASES / "twin_screw_4_6.toml").read_text() + (
-        '\n[export]\nformats = ["cutter"]\nclearance_um = 40\nclearance_on = "female"\n'))
+        '\n[export]\nformats = ["cutter"]\nclearance_um = 40\nclearance_on = "female"\n'
+        'cutter_setting_angle_deg = { male = 53.4 }\n'))
     out = rotorflow("run", case, "--build", tmp_path / "build")
     assert out.returncode == 2, out.stderr
     lines = out.stderr.strip().splitlines()
-    assert len(lines) == 1 and "the male rotor's disc cutter" in lines[0], out.stderr
+    assert len(lines) == 1 and "form cutter and the male rotor" in lines[0], out.stderr
     assert not (tmp_path / "build").exists()
 
 # ---------------------------------------------------------------- SIGKILL mid-stage

@@ -1,0 +1,76 @@
+"""Defects a trial of the 1-1 screw pumps found: the multiphase pump at a gas volume
+fraction of 1 with the liquid's keys left in the case (a designer's all-gas point of a
+multiphase map) is the dry pump, not a chamber whose gas volume is read from the
+accumulators; a sweep or an optimisation may vary a twin-screw rotor's wrap by the key
+its case gives it."""
+
+from __future__ import annotations
+
+import copy
+import functools
+
+import pytest
+
+from rotorflow.geometry.summary import build_machine, chamber_table
+from rotorflow.postprocess import pump_multiphase as pm
+from rotorflow.workflow.case import case_from_raw, load_toml
+
+
+@functools.cache
+def pump():
+    raw = load_toml(pm.EXAMPLE)
+    case = case_from_raw(raw, pm.EXAMPLE)
+    return raw, chamber_table(case, build_machine(case))
+
+
+def test_a_gas_volume_fraction_of_one_with_liquid_keys_is_the_dry_pump():
+    """Measured before the fix: 'step size underflow near angle 1.057410 rad' (the model
+    took 1 / rho_l with no liquid block, so the liquid's mass was read from the
+    accumulators' columns)."""
+    raw, table = pump()
+    dry = copy.deepcopy(raw)
+    for key in ("gas_volume_fraction", "liquid_density_kg_m3", "liquid_cp_J_kgK"):
+        dry["operating"].pop(key)
+    wet = copy.deepcopy(raw)
+    wet["operating"]["gas_volume_fraction"] = 1.0
+    a = pm.point(dry, table, str(pm.EXAMPLE))
+    b = pm.point(wet, table, str(pm.EXAMPLE))
+    assert b["converged"]
+    for key in ("eta_v", "indicated_kW", "power_kW", "mass_flow_kg_s"):
+        assert b[key] == pytest.approx(a[key], rel=1e-9), key
+
+
+# --- a pump's wrap in a sweep or an optimisation ------------------------------------------
+
+def _copy_example(tmp_path, name):
+    src = pm.EXAMPLE.parent / name
+    (tmp_path / name).write_text(src.read_text())
+    return tmp_path / name
+
+
+def test_a_sweep_over_the_wrap_of_a_twin_screw_rotor_is_read(tmp_path):
+    """The pump examples give their wrap as wrap_male_deg, which the case loader takes;
+    a sweep over it was refused ("unknown key 'wrap_male_deg' in [sweep]")."""
+    from rotorflow.errors import CaseError
+    from rotorflow.workflow.sweep_file import load_sweep
+
+    _copy_example(tmp_path, "screw_pump_vacuum.toml")
+    path = tmp_path / "wrap.toml"
+    path.write_text('[study]\nbase = "screw_pump_vacuum.toml"\nwant = ["geometry"]\n\n'
+                    '[grid]\n"sweep.wrap_male_deg" = [720, 1440]\n')
+    spec = load_sweep(path)
+    assert [row["sweep.wrap_male_deg"] for _, row in spec.points] == [720, 1440]
+    path.write_text(path.read_text().replace("wrap_male_deg", "wrap_rotor_deg"))
+    with pytest.raises(CaseError, match="unknown key 'wrap_rotor_deg' in \\[sweep\\]"):
+        load_sweep(path)
+
+
+def test_an_optimisation_over_the_wrap_of_a_twin_screw_rotor_is_read(tmp_path):
+    from rotorflow.workflow.optimise_spec import load_optimise
+
+    case = _copy_example(tmp_path, "screw_pump_vacuum.toml")
+    case.write_text(case.read_text() + '\n[optimise]\npopulation = 4\ngenerations = 1\n\n'
+                    '[optimise.variables]\n"sweep.wrap_male_deg" = [720.0, 1440.0]\n\n'
+                    '[optimise.objectives]\n"geometry.swept_volume_m3" = "max"\n')
+    spec = load_optimise(case)
+    assert [v.name for v in spec.variables] == ["sweep.wrap_male_deg"]

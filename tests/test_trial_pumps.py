@@ -74,3 +74,24 @@ def test_an_optimisation_over_the_wrap_of_a_twin_screw_rotor_is_read(tmp_path):
                     '[optimise.objectives]\n"geometry.swept_volume_m3" = "max"\n')
     spec = load_optimise(case)
     assert [v.name for v in spec.variables] == ["sweep.wrap_male_deg"]
+
+
+# --- unit slips in the liquid's keys ------------------------------------------------------
+
+@pytest.mark.parametrize("key, value, word", [
+    ("liquid_density_kg_m3", 0.998, "g/cm3"),        # water in g/cm3
+    ("liquid_density_kg_m3", 998000.0, "denser"),
+    ("liquid_cp_J_kgK", 4.18, "kJ/kgK"),              # water in kJ/kgK
+])
+def test_a_slip_in_the_liquids_keys_is_refused_in_one_line(key, value, word):
+    """Both slips ran before: 0.998 kg/m3 for 60 s to an unconverged cycle, 4.18 J/kgK to
+    a discharge 100 K hotter than the water-cooled 293 K, exit 0."""
+    from rotorflow.errors import CaseError
+
+    raw = copy.deepcopy(load_toml(pm.EXAMPLE))
+    raw["operating"][key] = value
+    with pytest.raises(CaseError) as err:
+        case_from_raw(raw, pm.EXAMPLE)
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith(f"{key} = {value:g} in [operating]"), msg
+    assert word in msg and f'accept = ["operating.{key}"]' in msg, msg

@@ -95,3 +95,29 @@ def test_a_slip_in_the_liquids_keys_is_refused_in_one_line(key, value, word):
     msg = str(err.value)
     assert "\n" not in msg and msg.startswith(f"{key} = {value:g} in [operating]"), msg
     assert word in msg and f'accept = ["operating.{key}"]' in msg, msg
+
+
+# --- an oil-flooded machine that delivers nothing -----------------------------------------
+
+def test_an_oil_flooded_screw_that_delivers_nothing_gets_its_figures():
+    """The 4/6 oil-flooded compressor with its oil's viscosities and 1 mm clearances: the
+    leakage exceeds the displacement, so there is no discharged mixture; the oil films'
+    temperature took it and the command ended in a TypeError traceback."""
+    import math
+
+    from rotorflow.quasi1d import case_settings, simulate
+
+    path = pm.EXAMPLE.parent / "twin_screw_4_6.toml"
+    raw = copy.deepcopy(load_toml(path))
+    raw["operating"]["speed_rpm"] = 3000
+    raw["leakage"]["gap_um"] = 1000
+    raw["mechanical"].update(oil_viscosity_40C_cSt=46, oil_viscosity_100C_cSt=6.8)
+    case = case_from_raw(raw, path)
+    table = chamber_table(case, build_machine(case))
+    fig = simulate(table, *case_settings(raw, str(path))).figures
+    assert fig["mass_flow_kg_s"] < 0 and "no delivery" in fig["warning"]
+    assert fig["discharge_mixture_temperature_K"] is None
+    mech = fig["mechanical"]
+    assert mech["oil_film_temperature_K"] == pytest.approx(raw["operating"]["T_oil_K"])
+    assert mech["oil_film_heating_K"] is None
+    assert math.isfinite(fig["shaft_power_W"]) and sum(mech["oil_film_W"].values()) > 0

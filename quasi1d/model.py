@@ -446,5 +446,8 @@ def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Port
     return ChamberModel(geo, fluid, op, leak, ports, suc, dis, n, nv, laws, acc, segs,
                         suc.rho * geo.v_max, op.p_suction_Pa * geo.v_max,
                         hasattr(fluid, "gamma"), 1.0 / geo.omega_outer,
-                        1.0 / op.liquid_density_kg_m3 if op.liquid_density_kg_m3 else 0.0, ratio,
+                        # a density without a liquid drawn in (gas volume fraction 1) has
+                        # no volume to take: nv = 2 holds no liquid block to read it from
+                        1.0 / op.liquid_density_kg_m3 if op.liquid_density_kg_m3 and ratio > 0
+                        else 0.0, ratio,
                         wall_heat(op, geo))

@@ -119,17 +119,22 @@ def _oil_films(result: SimulationResult, table, mech: Mechanical, loads: GasLoad
                            (f"viscous shear of the injected oil in the clearances ({why})",)
                            ), {}
     fig = result.figures
-    T_film = 0.5 * (op.oil_temperature_K + fig["discharge_mixture_temperature_K"])
+    T_mix = fig["discharge_mixture_temperature_K"]
+    # (no delivery, no discharged mixture: the films at the injected oil's temperature)
+    T_film = op.oil_temperature_K if T_mix is None else 0.5 * (op.oil_temperature_K + T_mix)
     gaps = {law.path.name: law.gap_m for law in model.laws}
     omegas = {r.name: abs(r.speed_ratio * loads.omega_ref) for r in loads.rotors}
     film = oil_film_loss(table.oil_films, gaps, omegas, float(table.length_m), mech, T_film)
     # what the shear heat would add to the discharged gas and oil, were it fed back
     fluid, p_d, T_d = model.fluid, op.p_discharge_Pa, fig["discharge_temperature_K"]
-    cp_gas = fluid.state_pT(p_d, T_d + 0.5)[2] - fluid.state_pT(p_d, T_d - 0.5)[2]
-    capacity = fig["mass_flow_kg_s"] * cp_gas + fig["oil_flow_kg_s"] * op.oil_cp_J_kgK
+    heating = None
+    if T_d is not None:
+        cp_gas = fluid.state_pT(p_d, T_d + 0.5)[2] - fluid.state_pT(p_d, T_d - 0.5)[2]
+        capacity = fig["mass_flow_kg_s"] * cp_gas + fig["oil_flow_kg_s"] * op.oil_cp_J_kgK
+        heating = film.total_W / capacity if capacity > 0.0 else None
     return film, {
         "oil_film_W": film.by_surface_W,
         "oil_film_viscosity_Pa_s": film.viscosity_Pa_s,
         "oil_film_temperature_K": film.temperature_K,
-        "oil_film_heating_K": film.total_W / capacity if capacity > 0.0 else None,
+        "oil_film_heating_K": heating,
     }

@@ -94,6 +94,10 @@ BY_KEY: dict[str, Range] = {
     "leakage.viscosity_Pa_s": Range(1e-7, 10.0, "Pa s", "", "was it given in cP or cSt?"),
     "operating.liquid_viscosity_Pa_s": Range(1e-5, 10.0, "Pa s", "",
                                              "was it given in cP or cSt?"),
+    # a liquid drawn in: from liquefied gases (propane 500 kg/m3) to brines and muds
+    "operating.liquid_density_kg_m3": Range(300.0, 3000.0, "kg/m3", "was it given in g/cm3?",
+                                            "denser than any pumped liquid but a metal"),
+    "operating.liquid_cp_J_kgK": Range(100.0, 10000.0, "J/kgK", "was it given in kJ/kgK?", ""),
     "numerics.rtol": Range(1e-12, 1e-2, "", "below round-off", "no digit of the answer is sure"),
     "numerics.atol": Range(0.0, 1e-2, "", "", "no digit of the answer is sure"),
     "numerics.cycle_rtol": Range(1e-14, 1e-2, "", "below round-off", "the cycle is not periodic"),

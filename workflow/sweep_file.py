@@ -132,8 +132,18 @@ def _check_param(path, name: str, base_raw: dict):
     if section not in SECTIONS or section == "outputs":
         raise _err(path, f"sweep key '{name}' names no case section")
     keys = known_keys(section, base_raw["machine"].get("type"))
+    if section == "sweep" and keys is not None and key not in keys:
+        keys = keys | _rotor_wrap_keys(path, base_raw)
     if keys is not None and key not in keys:
         raise _err(path, f"sweep key '{name}': unknown key '{key}' in [{section}]")
+
+
+def _rotor_wrap_keys(path, base_raw: dict) -> set[str]:
+    """The wrap keys the case loader takes by rotor name (wrap_male_deg, ...): they need
+    the base case's pair, built only when a [sweep] key is not one of every family's."""
+    from .case import _machine, _wrap_keys
+
+    return set(_wrap_keys(_machine(base_raw, Path(path))[0]))
 
 
 def _scalar(v) -> bool:

@@ -443,11 +443,8 @@ def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Port
     if leak.mixture == "centrifuged" and any(seg.walls for seg in segs):
         raise CaseError('leakage mixture "centrifuged" takes flows driven by the pressure '
                         "only: drop wall_motion (the walls' drag would carry liquid against it)")
+    inv_rho = 1.0 / op.liquid_density_kg_m3 if op.liquid_density_kg_m3 and ratio > 0 else 0.0
     return ChamberModel(geo, fluid, op, leak, ports, suc, dis, n, nv, laws, acc, segs,
                         suc.rho * geo.v_max, op.p_suction_Pa * geo.v_max,
-                        hasattr(fluid, "gamma"), 1.0 / geo.omega_outer,
-                        # a density without a liquid drawn in (gas volume fraction 1) has
-                        # no volume to take: nv = 2 holds no liquid block to read it from
-                        1.0 / op.liquid_density_kg_m3 if op.liquid_density_kg_m3 and ratio > 0
-                        else 0.0, ratio,
+                        hasattr(fluid, "gamma"), 1.0 / geo.omega_outer, inv_rho, ratio,
                         wall_heat(op, geo))

@@ -15,7 +15,9 @@ Definitions (per lobe period = one chamber's cycle, t_P = period / omega_outer):
                                 saturation line before p_dis (every refrigeration point:
                                 the reversible isothermal path would condense the vapour,
                                 a condenser's work, not a compressor's; and a wet suction)
-    discharge_temperature_K     temperature of the delivered gas at its mean enthalpy
+    discharge_temperature_K     temperature of the delivered gas at its mean enthalpy (None,
+                                with a warning, outside the chambers' range: the fixed
+                                discharge plenum's artefact, :mod:`.result`)
     suction_return_enthalpy_W   (no oil or liquid) the enthalpy the gas flowing back into the
                                 suction plenum carries above the suction's own, lost there
                                 (power = delivered enthalpy rise + this - heat to the gas)

@@ -425,7 +425,7 @@ def _flux(seg: Segment, x, k1, scalar_k: bool):
 
 
 def build(geo: ChamberGeometry, fluid, op: Operating, leak: Leakage, ports: Ports) -> ChamberModel:
-    suc, dis = plenums(fluid, op)
+    suc, dis = plenums(fluid, op, ports.discharge_plenum_K)
     ratio = liquid_ratio(op, suc)
     if leak.mixture not in Leakage.MIXTURES:
         raise CaseError(f"leakage mixture {leak.mixture!r} is not one of "

@@ -29,9 +29,10 @@ class Plenum:
     w: float = 0.0  # the vapour's mass fraction in the gas (a volatile liquid, .humid)
 
 
-def plenums(fluid, op: Operating) -> tuple[Plenum, Plenum]:
+def plenums(fluid, op: Operating, T_discharge: float | None = None) -> tuple[Plenum, Plenum]:
     """(suction, discharge) plenums of an operating point: the suction state, and the
-    discharge pressure holding what flows back from it (see below)."""
+    discharge pressure holding what flows back from it (see below; at ``T_discharge``
+    where given: a dry gas's delivered state, :mod:`.delivered_plenum`)."""
     if getattr(fluid, "vapour", None) is not None:
         from .humid import humid_plenums
         return humid_plenums(fluid, op)
@@ -42,6 +43,8 @@ def plenums(fluid, op: Operating) -> tuple[Plenum, Plenum]:
 
     wet = suction_given(op)
     suc = plenum(op.p_suction_Pa, op.T_suction_K, **wet)
+    if T_discharge is not None:
+        return suc, plenum(op.p_discharge_Pa, T_discharge)
     # Discharge plenum gas (what flows back) at the isentropic end state of the pressure
     # ratio: the state of gas compressed from suction without losses.
     dis_h = {}

@@ -161,7 +161,8 @@ def _undefined_discharge_T(T_dis, lo, hi, model) -> str:
             f"({lo:.0f}-{hi:.0f} K) and is not reported: the gas flowing back from the "
             f"discharge is held at the plenum's fixed {model.dis.T:.0f} K, and where that "
             f"backflow is large against the delivery (vacuum pumps) the delivered enthalpy, "
-            f"their difference, is not the delivered gas's")
+            f"their difference, is not the delivered gas's ([ports] discharge_plenum = "
+            f"\"delivered\" holds it at the delivered gas's own, for a dry gas)")
 
 
 def plot_cycle(result: SimulationResult, folder: Path, stem: str = "quasi1d") -> list[Path]:

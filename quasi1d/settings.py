@@ -354,8 +354,13 @@ class Ports:
 
     model: str = "ideal"
     coefficient: float = 0.8  # discharge coefficient of a sharp-edged port
+    # The gas the discharge plenum holds (what flows back from it): "isentropic", the end
+    # state of the pressure ratio from suction; "delivered", the delivered gas's own
+    # (:mod:`.delivered_plenum`: a dry gas, found by one cycle solve per iterate)
+    discharge_plenum: str = "isentropic"
+    discharge_plenum_K: float | None = None  # (set by that iteration, not a key)
 
-    KEYS = ("model", "coefficient")
+    KEYS = ("model", "coefficient", "discharge_plenum")
 
     @classmethod
     def from_section(cls, d: dict, where: str = "the case") -> Ports:
@@ -364,6 +369,8 @@ class Ports:
         return cls(
             model=_choice(d, "model", s, where, PORT_MODELS, "ideal"),
             coefficient=_number(d, "coefficient", s, where, 0.8, positive=True),
+            discharge_plenum=_choice(d, "discharge_plenum", s, where,
+                                     ("isentropic", "delivered"), "isentropic"),
         )
 
 

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 from rotorflow.errors import CaseError
 
-from . import cycle
+from . import cycle, delivered_plenum
 from .chamber import prepare
 from .fluids import make_fluid
 from .mechanical import Mechanical
@@ -68,6 +68,20 @@ def simulate(table, operating: Operating, leakage: Leakage | None = None,
     (default: the published coefficients of :class:`Mechanical`).
     """
     model = build_model(table, operating, leakage, ports, numerics, fluid)
-    result = make_result(cycle.solve(model, numerics or Numerics()))
+    num = numerics or Numerics()
+    delivered = ports is not None and ports.discharge_plenum == "delivered"
+    if delivered:
+        delivered_plenum.check(model)
+    sol = cycle.solve(model, num)
+    if delivered:
+        model, sol = delivered_plenum.settle(
+            lambda T: build_model(table, operating, leakage,
+                                  delivered_plenum.plenum_ports(ports, T), numerics,
+                                  model.fluid),
+            lambda m: cycle.solve(m, num), model, sol)
+    result = make_result(sol)
+    if model.ports.discharge_plenum_K is not None:
+        result = replace(result, figures={**result.figures,
+                                          "discharge_plenum_K": model.ports.discharge_plenum_K})
     extra, loads = shaft_figures(result, table, mechanical or Mechanical())
     return replace(result, figures={**result.figures, **extra}, loads=loads)

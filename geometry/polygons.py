@@ -122,7 +122,7 @@ class PolygonDistance:
         (+1 outside) and the vertex nearest each point."""
         n, poly = len(self.poly), self.poly
         _, k = self.tree.query(points, self.nearest)
-        k = k.reshape(len(points), -1)
+        k = k.reshape(len(points), self.nearest)
         idx = np.concatenate([k, k - 1], axis=1) % n
         a, b = poly[idx], poly[(idx + 1) % n]
         ab, ap = b - a, points[:, None, :] - a

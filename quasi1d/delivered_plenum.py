@@ -32,10 +32,12 @@ from .network import ACC_H_DIS, ACC_M_DIS
 
 #: Tolerance of the plenum's temperature [K].
 T_TOL = 0.01
-#: Brent iterates at most (each a cycle solve).
+#: Cycle solves at most, the bracket's included.
 MAX_SOLVES = 30
 #: Factor by which the upper bracket grows while the difference keeps its sign.
 WIDEN = 1.5
+#: A condensable gas's plenum is kept this far above its dew point [K].
+DEW_MARGIN_K = 0.5
 
 
 def settle(build, solve, model, sol):
@@ -51,36 +53,51 @@ def settle(build, solve, model, sol):
     runs = {}
 
     def gap(T):
-        m = build(T)
-        s = solve(m)
-        runs[T] = (m, s)
-        if not _delivered(m, s):
-            raise CaseError(f"with the discharge plenum at {T:.1f} K the machine delivers "
-                            f"nothing: no delivered state to hold there")
-        a = m.acc(s.run.y[0])
-        return a[ACC_H_DIS] / a[ACC_M_DIS] - fluid.state_pT(p_d, T)[2]
+        if T not in runs:  # (Brent evaluates its bracket's ends again)
+            if len(runs) >= MAX_SOLVES:
+                raise CaseError(f"the discharge plenum's delivered state not found in "
+                                f"{MAX_SOLVES} cycle solves")
+            m = build(T)
+            s = solve(m)
+            if not (s.converged and _delivered(m, s)):
+                why = "did not converge" if not s.converged else "delivers nothing"
+                raise CaseError(f"with the discharge plenum at {T:.1f} K the cycle {why}: "
+                                f"no delivered state found ([ports] discharge_plenum)")
+            a = m.acc(s.run.y[0])
+            runs[T] = (m, s, a[ACC_H_DIS] / a[ACC_M_DIS] - fluid.state_pT(p_d, T)[2])
+        return runs[T][2]
 
     coldest, hottest = _range(model, sol)
     lo, hi = min(model.suc.T, coldest), max(hottest, model.dis.T)
-    g_lo = gap(lo)
-    g_hi = gap(hi)
-    while g_lo * g_hi > 0.0 and len(runs) < MAX_SOLVES:
-        if g_lo < 0.0:  # even the coldest plenum delivers colder
-            raise CaseError("the delivered gas is colder than a discharge plenum at the "
-                            f"coldest chamber's temperature ({lo:.1f} K): no delivered "
-                            "state found")
+    dew = _dew(model)
+    if dew is not None:  # (below it the plenum would hold liquid, not the delivered gas)
+        lo, hi = max(lo, dew + DEW_MARGIN_K), max(hi, dew + 2.0 * DEW_MARGIN_K)
+    if gap(lo) < 0.0:
+        raise CaseError("the delivered gas is colder than a discharge plenum at "
+                        f"{lo:.1f} K (the coldest chamber's, or the dew point's): no "
+                        "delivered state found ([ports] discharge_plenum)")
+    while gap(hi) > 0.0:
         hi *= WIDEN
-        g_hi = gap(hi)
     T = brentq(gap, lo, hi, xtol=T_TOL, maxiter=MAX_SOLVES)
-    best = min(runs, key=lambda t: abs(t - T))
-    return runs[best]
+    m, s, _ = runs[min(runs, key=lambda t: abs(t - T))]
+    return m, s
+
+
+DRY_GAS_ONLY = ('[ports] discharge_plenum = "delivered" takes a dry gas: with oil or a '
+                "liquid drawn in, the plenum's state is the mixture's")
 
 
 def check(model) -> None:
     """A plenum at the delivered state needs a dry gas."""
     if model.oil or model.liquid_ratio > 0:
-        raise CaseError('[ports] discharge_plenum = "delivered" takes a dry gas: with oil '
-                        "or a liquid drawn in, the plenum's state is the mixture's")
+        raise CaseError(DRY_GAS_ONLY)
+
+
+def _dew(model) -> float | None:
+    """The dew temperature at the discharge pressure of a CoolProp fluid, else None."""
+    from .plenums import _dew as dew
+
+    return dew(model.fluid, model.op)
 
 
 def _delivered(model, sol) -> bool:

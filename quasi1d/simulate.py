@@ -19,9 +19,12 @@ from .shaft import shaft_figures
 def case_settings(raw: dict, where: str) -> tuple:
     """(operating, leakage, ports, numerics, mechanical) of a parsed case file: the
     arguments of :func:`simulate` after the table (absent sections: their defaults)."""
-    return (Operating.from_section(raw["operating"], where),
-            Leakage.from_section(raw.get("leakage", {}), where),
-            Ports.from_section(raw.get("ports", {}), where),
+    op, ports = (Operating.from_section(raw["operating"], where),
+                 Ports.from_section(raw.get("ports", {}), where))
+    if ports.discharge_plenum == "delivered" and (op.gas_volume_fraction < 1.0
+                                                  or op.oil_mass_ratio > 0.0):
+        raise CaseError(delivered_plenum.DRY_GAS_ONLY)
+    return (op, Leakage.from_section(raw.get("leakage", {}), where), ports,
             Numerics.from_section(raw.get("numerics", {}), where),
             Mechanical.from_section(raw.get("mechanical", {}), where))
 

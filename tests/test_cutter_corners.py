@@ -116,3 +116,23 @@ def _polylines_cross(a, b) -> bool:
             if 0.0 < t < 1.0 and 0.0 < v < 1.0:
                 return True
     return False
+
+
+def test_a_corner_flank_that_meets_no_tool_circle_leaves_the_corner_to_the_other(
+        pin_cycloid):
+    """0.04 deg below the male's default setting angle the flank ends at one root
+    corner's first entry and at the mirror corner's second meet no tool circle; each
+    corner keeps its other flank's point, and the tool still regenerates the rotor
+    (it was refused: 'no contact')."""
+    _, _, asm = pin_cycloid
+    part = next(p for p in asm.holes if p.name == "male")
+    base = _setup(asm, "male")
+    setup = CutterSetup(base.setting_angle - math.radians(0.04), base.centre_distance, base.k)
+    cut = form_cutter(part.curve, setup, TOL)
+    rt = round_trip(part.curve, cut)
+    assert rt["round_trip_max_m"] < 1e-6 and rt["interference_m"] < 1e-6
+
+
+def test_polygon_distance_of_no_points():
+    ring = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    assert PolygonDistance(ring)(np.zeros((0, 2))).shape == (0,)

@@ -70,3 +70,16 @@ def test_an_oil_flooded_machine_is_refused(tmp_path):
     assert out.returncode == 2
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "takes a dry gas" in lines[0], out.stderr
+
+
+def test_a_refrigerants_plenum_stays_above_its_dew_point():
+    """R134a to 9 bar (dew point 308.7 K): the bracket's cold end is kept above the dew
+    point (at the suction's 285 K the plenum would hold subcooled liquid, 1257 kg/m3,
+    flowing back into the chambers); the plenum settles at the delivered vapour's state."""
+    import CoolProp.CoolProp as CP
+
+    _, held = _run("refrigeration_r134a")
+    fig = held.figures
+    assert fig["discharge_plenum_K"] > CP.PropsSI("T", "P", 9e5, "Q", 1, "R134a")
+    assert fig["discharge_temperature_K"] == pytest.approx(fig["discharge_plenum_K"], abs=0.5)
+    assert fig["discharge_quality"] == 1

@@ -122,9 +122,9 @@ def test_a_liquid_drawn_in_is_no_port_that_cannot_empty_the_chamber(tmp_path):
 def test_the_delivered_temperature_lies_among_the_chambers_or_is_not_reported(name, reported):
     """The delivered gas is what the chambers pushed out: its temperature lies within
     theirs.  Where the backflow from the fixed discharge plenum dominates (the trochoidal
-    pump at 0.05 bar: -687 K reported until session 38) it is not reported, with a
-    warning; the compressors report theirs (within 5 % of the chambers' range, the
-    traces being samples)."""
+    pump at 0.05 bar: -687 K reported until session 38, twice the chambers' range below
+    them) it is not reported, with a warning; the compressors report theirs, without
+    one (within 5 % of the chambers' range, the traces being samples)."""
     from rotorflow.geometry.summary import chamber_table
     from rotorflow.quasi1d.result import DISCHARGE_T_SLACK
     from rotorflow.quasi1d.simulate import case_settings, simulate

@@ -236,10 +236,12 @@ def form_cutter(curve, setup: CutterSetup, tol: float, space=None) -> Cutter:
     # corner to its other flank's point, the end to the flank's next (the trochoidal
     # pump male: its tips' normals run along the tool axis).
     ends = np.array([0, len(u) - 1])
-    lost = np.union1d(corners[np.isnan(z[corners])], ends[np.isnan(z[ends])])
+    lost = np.union1d(np.union1d(corners[np.isnan(z[corners])],
+                                 (corners + 1)[np.isnan(z[corners + 1])]),
+                      ends[np.isnan(z[ends])])
     if len(lost):
         u, p, dp, z = (np.delete(x, lost, axis=0) for x in (u, p, dp, z))
-        kept = np.setdiff1d(corners, lost)
+        kept = corners[~np.isin(corners, lost) & ~np.isin(corners + 1, lost)]
         corners = kept - np.searchsorted(lost, kept)
     if np.isnan(z).any():
         i = int(np.nonzero(np.isnan(z))[0][0])

@@ -33,6 +33,10 @@ INTERFERENCE_DENSITY = 100
 CIRCLES_PER_INTERVAL = 4
 #: Golden-section steps of a grid interval's least distance (0.618^32: 2e-7 of it).
 SEARCH_STEPS = 32
+#: Polygon vertices whose segments are searched for the nearest: with 2, 45 of 200 000
+#: points near the 4/6 male's root corners (its polygon's edges reach 0.5 mm there)
+#: missed their nearest segment by up to 61 um; with 6, one by 1.7 um.
+NEAREST = 6
 #: Chordal tolerance of the profile polygon [m].
 POLYGON_TOL = 1e-7
 GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
@@ -89,7 +93,7 @@ class _Distance(PolygonDistance):
     lower bound: most of a tool circle's images lie there)."""
 
     def __init__(self, poly):
-        super().__init__(poly, nearest=2)
+        super().__init__(poly, nearest=NEAREST)
         self.r_max = float(np.linalg.norm(self.poly, axis=-1).max())
 
     def __call__(self, q):

@@ -105,7 +105,7 @@ def signed_gap(male, female, gearing: Gearing, thetas, tol: float):
     um = sample(male, tol)
     pm = male.point(um)
     uf = sample(female, tol)
-    polygon = PolygonDistance(female.point(uf), nearest=2)
+    polygon = PolygonDistance(female.point(uf), nearest=6)  # (edges long near corners)
     reach = female.radius_max + tol  # male points farther from O2 cannot touch
     gaps, where = [], []
     for theta in np.atleast_1d(thetas):

@@ -96,6 +96,22 @@ def test_vacuum_axis_efficiency_rises_with_suction_pressure(tmp_path):
         assert len(eta) == 3 and eta == sorted(eta)
 
 
+def test_a_pressure_axis_over_decades_is_spaced_in_its_logarithm():
+    """A vacuum map from 0.1 to 100 mbar: evenly spaced, three of four points would lie
+    above 33 mbar; evenly in the logarithm they are the decades.  A range within a
+    decade stays evenly spaced."""
+    from rotorflow.workflow.perf_map import log_pressures, map_spec
+
+    raw = tomllib.loads((ROOT / "examples" / "screw_pump_vacuum.toml").read_text())
+    vac = map_spec({**raw, "map": {"p_suction_bar": [0.0001, 0.1], "points": [2, 4]}}, "x")
+    assert vac.pressures == pytest.approx((0.0001, 0.001, 0.01, 0.1), rel=1e-12)
+    assert log_pressures(vac)
+    raw = tomllib.loads(DEFAULT.read_text())
+    lin = map_spec({**raw, "map": {"p_discharge_bar": [1.5, 4.0], "points": [2, 6]}}, "x")
+    assert lin.pressures == pytest.approx((1.5, 2.0, 2.5, 3.0, 3.5, 4.0), rel=1e-12)
+    assert not log_pressures(lin)
+
+
 @pytest.mark.parametrize("section, needle", [
     ({"points": [1, 3]}, "two integers from 2 to 100"),
     ({"p_discharge_bar": [0.5, 3.0]}, "leaves no pressure rise"),

@@ -9,7 +9,8 @@ vacuum duty, the suction pressure), from the case's optional [map] section:
     points = [10, 10]             # along speed, along pressure
 
 Without [map] the map spans half to one and a half times the case's speed and its
-pressure rise. The geometry does not change across a map, so the chamber table is built
+pressure rise. A pressure range of a decade or more (vacuum duty) is spaced evenly in its
+logarithm, and drawn so. The geometry does not change across a map, so the chamber table is built
 once and handed to every point (scattered once to every Dask worker); each point is one
 call of the product's quasi-1D model (:func:`rotorflow.quasi1d.simulate`), nothing
 re-implemented. A point that fails or does not converge stays in the map as a row with
@@ -37,6 +38,8 @@ BALANCE_LIMIT = 1e-6
 #: table's size (the real-fluid stress bench's reasoning; within 1.3e-4 of per-point tables).
 SHARED_TABLE_NODES = 300
 SECTION_KEYS = {"speed_rpm", "p_discharge_bar", "p_suction_bar", "points"}
+#: A pressure axis spanning this ratio or more is spaced evenly in its logarithm.
+LOG_DECADE = 10.0
 #: The columns of map.csv, in order (units in the names).
 COLUMNS = (
     "speed_rpm", "p_suction_bar", "p_discharge_bar", "pressure_ratio", "converged",
@@ -91,7 +94,7 @@ def map_spec(raw: dict, where: str) -> MapSpec:
                        for k in points)):
         raise CaseError(f"points in [map] of {where} must be two integers from 2 to 100 "
                         f"(along speed, along pressure), got {points!r}")
-    spec = MapSpec(_linspace(*speed, points[0]), pressure, _linspace(*press, points[1]))
+    spec = MapSpec(_linspace(*speed, points[0]), pressure, _pressures(*press, points[1]))
     if pressure == "p_discharge_bar":
         other_key, other = "p_suction_bar", ps
         bad = [p for p in spec.pressures if p <= ps]
@@ -118,6 +121,21 @@ def _range(section: dict, key: str, default: tuple[float, float], where: str):
 
 def _linspace(low: float, high: float, n: int) -> tuple[float, ...]:
     return tuple(low + (high - low) * i / (n - 1) for i in range(n))
+
+
+def _pressures(low: float, high: float, n: int) -> tuple[float, ...]:
+    """The pressure axis: evenly spaced, or evenly in its logarithm where it spans
+    LOG_DECADE or more (a vacuum map from 1 mbar to 1 bar: evenly, every point but the
+    first would lie above 0.11 bar)."""
+    if high / low < LOG_DECADE:
+        return _linspace(low, high, n)
+    return tuple(low * (high / low) ** (i / (n - 1)) for i in range(n))
+
+
+def log_pressures(spec) -> bool:
+    """Whether the map's pressures are spaced evenly in their logarithm."""
+    p = spec.pressures
+    return len(p) > 2 and p[-1] / p[0] >= LOG_DECADE
 
 
 def point_raw(raw: dict, spec: MapSpec, speed: float, pressure: float) -> dict:

@@ -13,7 +13,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .perf_map import COLUMNS, MapSpec, map_spec, point_raw, run_point, shared_fluid
+from .perf_map import COLUMNS, MapSpec, log_pressures, map_spec, point_raw, run_point, shared_fluid
 
 #: Figures drawn as contour plots: (column, label).
 PLOTTED = (
@@ -137,6 +137,8 @@ def _plot(folder: Path, rows: list[dict], spec: MapSpec) -> list[str]:
         if bad:
             ax.plot(*zip(*bad, strict=True), "rx", label="not converged")
             ax.legend(loc="upper right")
+        if log_pressures(spec):
+            ax.set_xscale("log")
         ax.set_xlabel(spec.pressure.replace("_bar", ", bar").replace("_", " "))
         ax.set_ylabel("driven rotor speed, rpm")
         ax.set_title(label)

@@ -30,6 +30,8 @@ SLIPS = [
     ("operating", "p_discharge_bar", 2.6e5, "Pa"),
     ("operating", "T_suction_K", 20, "Celsius"),
     ("operating", "T_wall_K", 1e-3, "Celsius"),
+    ("operating", "T_wall_K", 80, "Celsius"),  # 80 C: inside 50-1500 K, half the suction's
+    ("operating", "T_oil_K", 60, "Celsius"),
     ("leakage", "gap_um", 2e-5, "metres"),
     ("machine", "diameter_mm", 0.1, "metres"),
     ("machine", "length_mm", 0.1, "metres"),

@@ -190,6 +190,27 @@ def check_plausible(data: dict, path: Path | str) -> None:
             if full in accept or f"{name}.{key}" in accept:
                 continue
             _check_range(f"{key} = {x:g} {at}", full, x, range_of(name, key))
+    _check_beside_suction(data.get("operating"), where, accept)
+
+
+#: The machine's other temperatures against its suction's: a wall or an injected oil
+#: below half the suction's absolute temperature is a Celsius slip (80 C for 80 K: the
+#: absolute range, from 50 K, lets it through; it ran, the wall cooling the gas to an
+#: eta_v of 1.4), a deliberate one a cryogenic rig's, accepted by name.
+BESIDE_SUCTION = ("T_wall_K", "T_oil_K")
+
+
+def _check_beside_suction(op, where: str, accept: set[str]) -> None:
+    if not isinstance(op, dict) or not isinstance(op.get("T_suction_K"), int | float):
+        return
+    ts = float(op["T_suction_K"])
+    for key in BESIDE_SUCTION:
+        x = op.get(key)
+        if (isinstance(x, int | float) and not isinstance(x, bool) and 0.0 < x < 0.5 * ts
+                and f"operating.{key}" not in accept):
+            raise CaseError(f"{key} = {x:g} in [operating] of {where} is below half of "
+                            f"T_suction_K = {ts:g} K: was it given in Celsius? (a "
+                            f"deliberate value: [{SECTION}] accept = [\"operating.{key}\"])")
 
 
 def _check_range(label: str, full: str, x: float, rng: Range) -> None:

@@ -29,6 +29,7 @@ import numpy as np
 from rotorflow.errors import CaseError
 
 from .network import ACC_H_DIS, ACC_M_DIS
+from .plenums import discharge_dew
 
 #: Tolerance of the plenum's temperature [K].
 T_TOL = 0.01
@@ -69,7 +70,7 @@ def settle(build, solve, model, sol):
 
     coldest, hottest = _range(model, sol)
     lo, hi = min(model.suc.T, coldest), max(hottest, model.dis.T)
-    dew = _dew(model)
+    dew = discharge_dew(fluid, model.op)
     if dew is not None:  # (below it the plenum would hold liquid, not the delivered gas)
         lo, hi = max(lo, dew + DEW_MARGIN_K), max(hi, dew + 2.0 * DEW_MARGIN_K)
     if gap(lo) < 0.0:
@@ -83,21 +84,13 @@ def settle(build, solve, model, sol):
     return m, s
 
 
-DRY_GAS_ONLY = ('[ports] discharge_plenum = "delivered" takes a dry gas: with oil or a '
-                "liquid drawn in, the plenum's state is the mixture's")
-
-
-def check(model) -> None:
-    """A plenum at the delivered state needs a dry gas."""
-    if model.oil or model.liquid_ratio > 0:
-        raise CaseError(DRY_GAS_ONLY)
-
-
-def _dew(model) -> float | None:
-    """The dew temperature at the discharge pressure of a CoolProp fluid, else None."""
-    from .plenums import _dew as dew
-
-    return dew(model.fluid, model.op)
+def check(op, ports) -> None:
+    """A plenum at the delivered state needs a dry gas (no oil injected, no liquid
+    drawn in)."""
+    if ports.discharge_plenum == "delivered" and (op.gas_volume_fraction < 1.0
+                                                  or op.oil_mass_ratio > 0.0):
+        raise CaseError('[ports] discharge_plenum = "delivered" takes a dry gas: with oil '
+                        "or a liquid drawn in, the plenum's state is the mixture's")
 
 
 def _delivered(model, sol) -> bool:
@@ -106,9 +99,9 @@ def _delivered(model, sol) -> bool:
 
 def _range(model, sol) -> tuple[float, float]:
     """The coldest and the hottest chamber's temperature over the solved cycle."""
-    from .result import make_result
+    from .result import traces
 
-    T = make_result(sol).chamber["T_K"]
+    T = traces(sol)[1]["T_K"]
     return (float(np.min(T)), float(np.max(T))) if len(T) else (model.suc.T, model.dis.T)
 
 

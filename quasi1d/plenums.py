@@ -61,7 +61,7 @@ def plenums(fluid, op: Operating, T_discharge: float | None = None) -> tuple[Ple
     if ratio > 0:
         Td = flooded_discharge_T(fluid, suc, op, ratio)
         dis_h = {}
-        dew = _dew(fluid, op)
+        dew = discharge_dew(fluid, op)
         if dew is not None and Td <= dew:
             # Oil at or below the condensing temperature cools the mixture to below the
             # dew point: the gas over it is saturated vapour (the rest condenses into the
@@ -71,7 +71,7 @@ def plenums(fluid, op: Operating, T_discharge: float | None = None) -> tuple[Ple
     return suc, plenum(op.p_discharge_Pa, Td, **dis_h)
 
 
-def _dew(fluid, op: Operating) -> float | None:
+def discharge_dew(fluid, op: Operating) -> float | None:
     """The dew temperature at the discharge pressure of a CoolProp fluid (None: no dome
     there, or a gas law)."""
     if not op.fluid.startswith("CoolProp::"):

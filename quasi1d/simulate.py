@@ -21,9 +21,7 @@ def case_settings(raw: dict, where: str) -> tuple:
     arguments of :func:`simulate` after the table (absent sections: their defaults)."""
     op, ports = (Operating.from_section(raw["operating"], where),
                  Ports.from_section(raw.get("ports", {}), where))
-    if ports.discharge_plenum == "delivered" and (op.gas_volume_fraction < 1.0
-                                                  or op.oil_mass_ratio > 0.0):
-        raise CaseError(delivered_plenum.DRY_GAS_ONLY)
+    delivered_plenum.check(op, ports)
     return (op, Leakage.from_section(raw.get("leakage", {}), where), ports,
             Numerics.from_section(raw.get("numerics", {}), where),
             Mechanical.from_section(raw.get("mechanical", {}), where))
@@ -70,21 +68,19 @@ def simulate(table, operating: Operating, leakage: Leakage | None = None,
     The gas loads, mechanical loss and shaft power (:mod:`.shaft`) use ``mechanical``
     (default: the published coefficients of :class:`Mechanical`).
     """
+    ports = ports or Ports()
+    delivered_plenum.check(operating, ports)
     model = build_model(table, operating, leakage, ports, numerics, fluid)
     num = numerics or Numerics()
-    delivered = ports is not None and ports.discharge_plenum == "delivered"
-    if delivered:
-        delivered_plenum.check(model)
     sol = cycle.solve(model, num)
-    if delivered:
+    if ports.discharge_plenum == "delivered":
         model, sol = delivered_plenum.settle(
             lambda T: build_model(table, operating, leakage,
                                   delivered_plenum.plenum_ports(ports, T), numerics,
                                   model.fluid),
             lambda m: cycle.solve(m, num), model, sol)
     result = make_result(sol)
-    if model.ports.discharge_plenum_K is not None:
-        result = replace(result, figures={**result.figures,
-                                          "discharge_plenum_K": model.ports.discharge_plenum_K})
     extra, loads = shaft_figures(result, table, mechanical or Mechanical())
+    if model.ports.discharge_plenum_K is not None:
+        extra["discharge_plenum_K"] = model.ports.discharge_plenum_K
     return replace(result, figures={**result.figures, **extra}, loads=loads)

@@ -10,8 +10,8 @@ vacuum duty, the suction pressure), from the case's optional [map] section:
 
 Without [map] the map spans half to one and a half times the case's speed and its
 pressure rise. A pressure range of a decade or more (vacuum duty) is spaced evenly in its
-logarithm, and drawn so. The geometry does not change across a map, so the chamber table is built
-once and handed to every point (scattered once to every Dask worker); each point is one
+logarithm, and drawn so. The geometry does not change across a map, so the chamber table
+is built once and handed to every point (scattered once to every Dask worker); each point is one
 call of the product's quasi-1D model (:func:`rotorflow.quasi1d.simulate`), nothing
 re-implemented. A point that fails or does not converge stays in the map as a row with
 its message: the map never drops a point silently.

@@ -41,7 +41,7 @@ from rotorflow.errors import CaseError
 
 from ..curves import closest, sample
 from .cutter_check import interference
-from .cutter_corners import CORNER_DEG, corner_limits, trim_swallowtails
+from .cutter_corners import CORNER_DEG, corner_limits, trim_swallowtails, turn_angles
 from .tooth_space import BISECT, tooth_space
 
 #: Samples of the bracket scan of the contact equations (bisected BISECT times after it).
@@ -296,9 +296,7 @@ def _meridian(axial, radius):
     s = np.concatenate([[0.0], np.cumsum(np.hypot(d[:, 0], d[:, 1]))])
     if not np.all(np.diff(s) > 0.0):
         raise CaseError("the form-cutter profile has repeated points")
-    turn = np.arctan2(d[:-1, 0] * d[1:, 1] - d[:-1, 1] * d[1:, 0],
-                      np.sum(d[:-1] * d[1:], -1))
-    corners = np.nonzero(np.abs(turn) > math.radians(CORNER_DEG))[0] + 1
+    corners = np.nonzero(np.abs(turn_angles(d[:-1], d[1:])) > math.radians(CORNER_DEG))[0] + 1
     breaks = np.unique(np.concatenate([[0], corners, [len(s) - 1]]))
     return s, _Broken(s, axial, breaks), _Broken(s, radius, breaks)
 

@@ -33,7 +33,7 @@ def corner_limits(prof, u, lo, hi):
     inner = np.arange(math.floor(lo) + 1, math.ceil(hi) + 1).astype(float)
     inner = inner[(inner > lo + END_LIMIT) & (inner < hi - END_LIMIT)]
     if len(inner):
-        turn = _turn(prof.derivative(inner - END_LIMIT), prof.derivative(inner))
+        turn = turn_angles(prof.derivative(inner - END_LIMIT), prof.derivative(inner))
         inner = inner[np.abs(turn) > math.radians(CORNER_DEG)]
     u = np.sort(np.concatenate([u, inner]), kind="stable")
     first = np.searchsorted(u, inner, side="left")
@@ -64,7 +64,9 @@ def trim_swallowtails(first, *columns):
     return [c[~drop] for c in out]
 
 
-def _turn(a, b):
+def turn_angles(a, b):
+    """The signed angles (radians) from each direction of ``a`` to the same row's of
+    ``b``."""
     return np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], np.sum(a * b, -1))
 
 

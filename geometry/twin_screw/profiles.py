@@ -120,7 +120,8 @@ def signed_gap(male, female, gearing: Gearing, thetas, tol: float):
         # polygon's least gap can hold the curve's; their feet on the true curve.
         d, sign, k = polygon.nearest_points(x[near])
         d = sign * d
-        near, k = near[d <= d.min() + 2.0 * tol], k[d <= d.min() + 2.0 * tol]
+        close = d <= d.min() + 2.0 * tol
+        near, k = near[close], k[close]
         _, _, signed = closest(female, x[near], uf[k])
         i = int(np.argmin(signed))
         gaps.append(float(signed[i]))

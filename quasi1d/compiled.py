@@ -207,7 +207,7 @@ def warm_up() -> None:
     the compiled segments; :func:`_cached` asks for every entry, and without this one
     the cache filled by ``make venv`` was never taken as filled: every process of a
     fresh checkout ran in numpy until the tests had called it)."""
-    from .settings import Leakage, Operating, Ports
+    from .settings import Leakage, Numerics, Operating, Ports
     from .simulate import simulate
     from .synthetic import sin2_table
 
@@ -219,10 +219,13 @@ def warm_up() -> None:
     base = {"p_suction_bar": 1.0, "p_discharge_bar": 4.0, "T_suction_K": 300.0,
             "speed_rpm": 3000.0, "volume_ratio": 3.0}
     leak = Leakage(gap_m=10e-6, model="nozzle")
+    # The compilation runs inside the first solve's clock: on a slow machine it took
+    # more than the default 60-s budget (2026-12-01), which stopped `make venv`.
+    num = Numerics(max_seconds=3600.0)
     for extra, ports in (({}, Ports()), ({"heat_capacity": "constant"}, Ports(model="nozzle")),
                          ({"oil_mass_ratio": 2.0}, Ports())):
         op = Operating.from_section({**base, **extra}, "warm-up")
-        sol = simulate(table, op, leak, ports).solution  # (its model holds the kernel)
+        sol = simulate(table, op, leak, ports, num).solution  # (its model holds the kernel)
         model = sol.model
         seg = next(s for s in model.segments if model._fused_args(s) is not None)
         model.rhs(seg.start, sol.y_start[None], seg)

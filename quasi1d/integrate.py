@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rotorflow.errors import RotorflowError
+from rotorflow.errors import RunFailure
 
 from . import stepping
 
@@ -40,7 +40,7 @@ from . import stepping
 NEGATIVE_MASS = 1e-9
 
 
-class IntegrationError(RotorflowError, RuntimeError):
+class IntegrationError(RunFailure):
     """The chamber equations could not be integrated (too stiff, or states left the range)."""
 
 

@@ -1,4 +1,6 @@
-"""Errors that the command line turns into one line on stderr and exit status 2."""
+"""Errors the command line turns into one line on stderr: exit status 2 for input the
+user must fix (:class:`CaseError`), 1 for a computation that ran and failed
+(:class:`RunFailure`)."""
 
 
 class RotorflowError(Exception):
@@ -9,5 +11,10 @@ class CaseError(RotorflowError, ValueError):
     """A case, sweep or table file is malformed or asks for something impossible."""
 
 
-class ExternalRunError(RotorflowError, RuntimeError):
+class RunFailure(RotorflowError, RuntimeError):
+    """Accepted input whose computation failed: an external program, or the solver.
+    Not bad input as far as the checks can tell, so not its exit status."""
+
+
+class ExternalRunError(RunFailure):
     """An external program (gmsh, OpenFOAM) failed; the message carries its log tail."""

@@ -43,6 +43,18 @@ def test_bad_operating_input_exits_2(tmp_path, old, new, word):
     assert len(lines) == 1 and word in lines[0], out.stderr
 
 
+def test_a_solve_that_fails_on_accepted_input_exits_1_not_2(tmp_path):
+    # A budget that runs out in the first period leaves no state to report: the input
+    # was accepted, the computation failed, so not the status of input to fix.
+    case = tmp_path / "case.toml"
+    case.write_text((CASES / "crc60.toml").read_text() + "\n[numerics]\nmax_seconds = 1e-6\n"
+                    "[plausibility]\naccept = [\"numerics.max_seconds\"]\n")
+    out = run("simulate", case, "--json")
+    assert out.returncode == 1 and out.stdout == ""
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "max_seconds" in lines[0], out.stderr
+
+
 def test_ideal_gas_and_coolprop_air_agree_at_the_crc60_point(tmp_path):
     # Issue 3: 0.5 % at the CRC.60 point.  Measured with dry air's cp(T) (the default):
     # flow 0.02 %, power 0.18 %, eta_v 0.05 %.  The rest is the real gas's compressibility.

@@ -16,7 +16,7 @@ import tempfile
 from pathlib import Path
 
 from rotorflow import __version__
-from rotorflow.errors import CaseError, RotorflowError
+from rotorflow.errors import CaseError, RotorflowError, RunFailure
 
 
 def cmd_geometry(args) -> int:
@@ -322,7 +322,10 @@ def main(argv: list[str] | None = None) -> int:
         # Bad input is one line, even where a library's message (CoolProp's) spans lines.
         print(f"rotorflow: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return 2
-    except RotorflowError as exc:  # a failed external run: its log tail, as it came
+    except RunFailure as exc:  # accepted input that failed to run: its log tail, as it came
+        print(f"rotorflow: error: {exc}", file=sys.stderr)
+        return 1
+    except RotorflowError as exc:
         print(f"rotorflow: error: {exc}", file=sys.stderr)
         return 2
 

@@ -115,8 +115,12 @@ def geometry_figures(case, machine: SweptMachine | None = None) -> dict:
     }
 
 
-def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
-    """The chamber table the quasi-1D model reads (see :mod:`.table`)."""
+def chamber_table(case, machine: SweptMachine | None = None,
+                  port_areas: bool = True) -> ChamberTable:
+    """The chamber table the quasi-1D model reads (see :mod:`.table`).  Without
+    ``port_areas`` a family that sweeps its port areas (the twin screw: 40-50 % of its
+    table's time) leaves them out (zeros, ``table.port_areas`` False): ideal ports follow
+    the port timing alone, which is kept."""
     m = machine or build_machine(case)
     cur = m.curves
     pair = m.pair
@@ -135,9 +139,13 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
     load_columns.update(pair.face_columns(m))
     area_lp, area_hp = cur.area_lp, cur.area_hp
     timing = {}
-    if getattr(pair, "port_areas", False):
+    swept = getattr(pair, "port_areas", False)
+    if swept and port_areas:
         area_lp, area_hp, parts = _port_areas(case, m)
         load_columns.update(parts)
+    elif swept:
+        area_lp, area_hp = np.zeros_like(cur.phi), np.zeros_like(cur.phi)
+    if swept:
         timing = _timing_scalars(case, m)
     paths = pair.leakage_paths(far, tracks, openings)
     return ChamberTable(
@@ -163,6 +171,7 @@ def chamber_table(case, machine: SweptMachine | None = None) -> ChamberTable:
         rotor_scalars=rotor_scalars,
         oil_films=pair.oil_films(paths),
         port_timing=timing,
+        port_areas=port_areas or not swept,
     )
 
 

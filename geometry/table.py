@@ -264,6 +264,10 @@ class ChamberTable:
     (:func:`..ports.port_timing`): ``suction_close_rad``, ``discharge_open_rad`` (ages)
     and the ``volume_ratio`` and ``early_opening_rad`` it was made for; the quasi-1D model
     reads it rather than re-deriving it ({}: none, the model derives its own)."""
+    port_areas: bool = True
+    """False: the area columns were not computed (zeros): a table for ideal ports, which
+    follow the port timing alone (:func:`..summary.chamber_table`); the quasi-1D model
+    refuses it for nozzle ports and it is never written."""
 
     @property
     def paths(self) -> tuple[LeakagePath, ...]:
@@ -333,6 +337,8 @@ _ROTOR_SCALAR = re.compile(
 
 def write(table: ChamberTable, csv_path: Path) -> None:
     """Write ``csv_path`` and its ``.json`` side-car (callers make the folder atomic)."""
+    if not table.port_areas:
+        raise ValueError("a chamber table without its port areas is not written")
     csv_path = Path(csv_path)
     far = sorted(table.seal_far, key=lambda d: (abs(d), -d))
     names = list(COLUMNS) + [far_column(d) for d in far] + list(table.columns)

@@ -80,7 +80,9 @@ def cmd_simulate(args) -> int:
     if "p_suction_bar" not in raw.get("operating", {}):
         raise CaseError(f"[operating] of {where} needs p_suction_bar (and the rest of the "
                         "operating point) to simulate")
-    result = simulate(chamber_table(case), *case_settings(raw, where))
+    settings = case_settings(raw, where)  # (refused before the geometry's time is spent)
+    ports = settings[2]
+    result = simulate(chamber_table(case, port_areas=ports.model != "ideal"), *settings)
     if args.traces:
         out = Path(args.traces)
         out.parent.mkdir(parents=True, exist_ok=True)

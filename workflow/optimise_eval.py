@@ -70,7 +70,9 @@ def _quasi1d(case, machine, raw: dict, where: str) -> dict:
     from rotorflow.geometry.summary import chamber_table
     from rotorflow.quasi1d import case_settings, simulate
 
-    result = simulate(chamber_table(case, machine), *case_settings(raw, where))
+    settings = case_settings(raw, where)
+    table = chamber_table(case, machine, port_areas=settings[2].model != "ideal")
+    result = simulate(table, *settings)
     return _flat("quasi1d", result.summary())
 
 

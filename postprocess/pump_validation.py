@@ -77,7 +77,8 @@ def point(raw: dict, table, where: str, **operating) -> dict:
             "mass_balance_error": fig["mass_balance_error"],
             "energy_balance_error": fig["energy_balance_error"],
             "leakage_kg_s": fig["leakage_kg_s"], "mass_flow_kg_s": fig["mass_flow_kg_s"],
-            "liquid_leakage_kg_s": fig.get("oil_leakage_kg_s"),
+            "liquid_leakage_kg_s": fig.get("liquid_leakage_kg_s"),
+            "liquid_flow_kg_s": fig.get("liquid_flow_kg_s"),
             "cpu_s": time.process_time() - t0}
 
 

@@ -123,6 +123,7 @@ QUASI1D = {
     "chamber_temperature_max_K": ("Highest chamber temperature over the cycle", "K"),
     "heat_to_gas_W": ("Heat to the gas", "W"),
     "oil_flow_kg_s": ("Oil flow delivered", "kg/s"),
+    "liquid_flow_kg_s": ("Liquid flow delivered", "kg/s"),
     "evaporated_kg_s": ("Liquid evaporated into the gas, net (negative: condensed)", "kg/s"),
     "discharge_vapour_fraction": ("Vapour mass fraction of the delivered gas", "fraction"),
     "cycles": ("Cycles computed", ""),
@@ -195,8 +196,9 @@ def quasi1d_label(key: str, reference: str = "reference") -> tuple[str, str]:
         name, unit = QUASI1D[key]
         return _fill(name, (), reference), _fill(unit, (), reference)
     head, _, path = key.partition(".")
-    if head in ("leakage_kg_s", "oil_leakage_kg_s") and path:
-        what = "Oil leakage" if head.startswith("oil") else "Leakage"
+    if head in ("leakage_kg_s", "oil_leakage_kg_s", "liquid_leakage_kg_s") and path:
+        what = {"oil": "Oil leakage", "liquid": "Liquid leakage"}.get(head.split("_")[0],
+                                                                     "Leakage")
         return f"{what} {LEAK_PATHS.get(path, path)}, gross", "kg/s"
     hit = re.fullmatch(r"loads\.rotors\.(\w+)\.(\w+)", key)
     if hit and hit.group(2) in ROTOR_LOADS:

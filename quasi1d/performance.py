@@ -33,14 +33,17 @@ Definitions (per lobe period = one chamber's cycle, t_P = period / omega_outer):
                                 (across the low- and the high-pressure end face)
     oil_flow_kg_s               net oil supplied: injected at suction closing, less what
                                 leaks into the suction plenum (over a periodic cycle the
-                                oil delivered)
+                                oil delivered); liquid_flow_kg_s instead where a liquid is
+                                drawn in with the gas (gas_volume_fraction < 1: a
+                                multiphase pump's water is no oil)
     evaporated_kg_s             (a volatile liquid, :mod:`.humid`) the liquid evaporated
                                 into the gas, net (negative: the vapour condensed)
     discharge_vapour_fraction   the delivered gas's vapour mass fraction
     oil_leakage_kg_s            gross oil flow per report key, as leakage_kg_s: the oil
                                 that leaks with the gas as a homogeneous mixture
                                 ([leakage] mixture, :mod:`.oil`); 0 where the leakage
-                                carries gas only or no oil is injected
+                                carries gas only or no oil is injected;
+                                liquid_leakage_kg_s where a liquid is drawn in
 
 Figures that are undefined (no net delivery) are None so that the JSON stays valid.
 """
@@ -54,10 +57,17 @@ from .fluids import suction_given
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_M_DIS, ACC_M_SUC, ACC_Q, ACC_W
 
 
+def liquid_name(op) -> str:
+    """What the figures call the liquid the model carries: "liquid" where it is drawn in
+    with the gas (a multiphase pump), else "oil" (injected, or none)."""
+    return "liquid" if op.gas_volume_fraction < 1.0 else "oil"
+
+
 def figures(sol: CycleSolution) -> dict:
     model = sol.model
     geo, op, fl = model.geo, model.op, model.fluid
     a = model.acc(sol.run.y[0])
+    liquid = liquid_name(op)
     t_period = geo.period / geo.omega_outer
     mdot = a[ACC_M_SUC] / t_period
     power = a[ACC_W] / t_period
@@ -88,10 +98,10 @@ def figures(sol: CycleSolution) -> dict:
         "discharge_temperature_K": T_dis,
         "discharge_mixture_temperature_K": _mixture_T(model, a, T_dis, w_dis),
         "heat_to_gas_W": float(a[ACC_Q] / t_period),
-        "oil_flow_kg_s": float(a[model.acc_cols.oil_m_in] / t_period),
+        f"{liquid}_flow_kg_s": float(a[model.acc_cols.oil_m_in] / t_period),
         "leakage_kg_s": {key: float(a[model.acc_cols.leak(key)] / t_period)
                          for key in model.acc_cols.leak_keys},
-        "oil_leakage_kg_s": _oil_leakage(model, a, t_period),
+        f"{liquid}_leakage_kg_s": _oil_leakage(model, a, t_period),
         "cycles": int(sol.cycles),
         "converged": bool(sol.converged),
         "mass_balance_error": float(sol.mass_closure),

@@ -36,6 +36,7 @@ import numpy as np
 from .loads import GasLoads, RotorLoads, gas_loads
 from .mechanical import Mechanical, liquid_acceleration_W, mechanical_loss
 from .oil_film import OilFilmLoss, oil_film_loss
+from .performance import liquid_name
 from .result import SimulationResult
 
 SHAFT_KEYS = ("shaft_power_W", "mechanical_loss_W", "adiabatic_efficiency_shaft", "loads",
@@ -81,7 +82,7 @@ def shaft_figures(result: SimulationResult, table, mech: Mechanical) -> tuple[di
     loss = mechanical_loss(loads, mech, float(table.diameter_m), omega_driven)
     fig = result.figures
     film, film_figures = _oil_films(result, table, mech, loads)
-    liquid_flow = max(float(fig.get("oil_flow_kg_s") or 0.0), 0.0)
+    liquid_flow = max(float(fig.get(f"{liquid_name(op)}_flow_kg_s") or 0.0), 0.0)
     lift = liquid_acceleration_W(liquid_flow, loads, table.rotor_scalars) \
         if liquid_flow > 0.0 else 0.0
     total_loss = loss.total_W + (0.0 if film is None else film.total_W) + (lift or 0.0)

@@ -221,6 +221,11 @@ def test_sealed_adiabatic_pump_is_the_ideal_cycle_with_the_liquids_volume(beta):
     work = pd * Vo - ps * Vt + (pi * Vgo - ps * beta * Vt) / (k - 1)
     assert fig["indicated_kW"] * 1e3 == pytest.approx(work * 1801 / 60, rel=2e-4)
     assert fig["eta_v"] == pytest.approx(beta, rel=1e-5)
+    # the liquid delivered is what came in with the gas, (1 - beta) / beta of its volume
+    # (named as the pump's liquid, not as injected oil)
+    rho_l = raw["operating"]["liquid_density_kg_m3"]
+    assert fig["liquid_flow_kg_s"] == pytest.approx(
+        rho_l * fig["flow_m3_min"] / 60 * (1 - beta) / beta, rel=1e-5)
 
 
 def test_a_liquid_that_fills_the_chamber_is_refused():

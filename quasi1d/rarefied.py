@@ -129,9 +129,11 @@ def _clausing(l: float) -> float:
     return float(math.sqrt(1.0 + l * l) - l + 2.0 * np.sum(w * J * F_out))
 
 
-def _rarefaction(kn, alpha_inf, slip):
-    """R(Kn) of :meth:`RarefiedLaw.rarefaction`, with the law's alpha_inf and s."""
-    alpha = alpha_inf * (2.0 / math.pi) * np.arctan(ALPHA1 * kn**BETA)
+def _rarefaction(kn, alpha_inf, slip, kn_beta=None):
+    """R(Kn) of :meth:`RarefiedLaw.rarefaction`, with the law's alpha_inf and s
+    (``kn_beta``: Kn**BETA where the caller has it cheaper than the power)."""
+    kn_beta = kn**BETA if kn_beta is None else kn_beta
+    alpha = alpha_inf * (2.0 / math.pi) * np.arctan(ALPHA1 * kn_beta)
     return (1.0 + alpha * kn) * (1.0 + 6.0 * slip * kn / (1.0 + kn))
 
 
@@ -222,8 +224,11 @@ class RarefiedLaw:
         one_minus_g, gw = _NODES[nodes]
         alpha_inf = self.alpha_inf if alpha_inf is None else alpha_inf
         slip = self.slip if slip is None else slip
-        e = np.exp(half[..., None] * one_minus_g)  # 1 / xi at the nodes in [x, 1]
-        r = _rarefaction(kn1[..., None] * e, _per_node(alpha_inf), _per_node(slip))
+        z = half[..., None] * one_minus_g
+        e = np.exp(z)  # 1 / xi at the nodes in [x, 1]
+        # (Kn**BETA at the nodes by an exponential: numpy's power costs three of them)
+        kn_beta = (kn1**BETA)[..., None] * np.exp(BETA * z)
+        r = _rarefaction(kn1[..., None] * e, _per_node(alpha_inf), _per_node(slip), kn_beta)
         return half * np.sum(gw * r / (e * e), axis=-1)
 
     def reduced_flux(self, f_nozzle, x, p1, rho1):

@@ -71,8 +71,17 @@ def _section(ports, span_deg=2.0):
 
 
 def test_the_outlines_are_the_products_ports_simplified_within_a_fraction_of_a_face(slab):
-    ports, info, _ = slab
-    assert info["timing_deg"]["suction_close"] == pytest.approx(194.39, abs=0.01)
+    ports, info, machine = slab
+    # The straight slab's suction closes at its volume maximum, which by symmetry lies at
+    # phi = pi (1 + 1/N1) (seed 000: death mirrors birth about it), as an age since the
+    # chamber's birth phi_i (194.39 deg for this pair).  The peak between the table's
+    # nodes is found on a cubic Hermite (measured 2e-7 deg off); the nearest node's angle
+    # is 0.013 deg off here and fails this.
+    sec, n1 = machine.section, PAIR.lobes_outer
+    assert math.degrees(sec.phi_i + sec.phi_f) == pytest.approx(360.0 * (1 + 1 / n1),
+                                                                abs=1e-9)
+    assert info["timing_deg"]["suction_close"] == pytest.approx(
+        180.0 * (1 + 1 / n1) - math.degrees(sec.phi_i), abs=0.01)
     for name in ("suction", "discharge"):
         # Clipper's outline at 50 um: a few tenths of a per cent of the port's area
         assert abs(info[name]["area_change"]) <= 2e-3

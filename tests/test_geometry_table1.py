@@ -1,6 +1,7 @@
 """Seed 000 Table 1: the four optimised helical machines, against the published rounding."""
 
 import csv
+import functools
 import math
 
 import pytest
@@ -20,10 +21,24 @@ ROWS = list(csv.DictReader((REFERENCE / "gerotor_screw_table1.csv").open()))
 UNREACHABLE = {"inner_ev5": {"V_dr_bar": 0.3175, "Pi_max": 0.0445}}
 
 
+#: Pi_max against the table: its three decimals are 0.3 % of 0.154 and 0.9 % of 0.056;
+#: 3 %, as V_dr_bar, leaves room for the paper's and our discretisation of the torques
+#: (the outer-driven rows meet it: 0.5 % and 2.1 % measured).
+PI_MAX_REL = 0.03
+#: Rows whose Pi_max misses PI_MAX_REL with no reason found: kept as strict xfails.
+PI_MAX_MISSED = {"inner_ev2": "Pi_max 0.0202 against the table's 0.018 (+12 %), with "
+                              "V_dr_bar within 1 %; both inner-driven rows come out high"}
+
+
+@functools.cache
+def figures(name):
+    return geometry_figures(load_case(CASES / f"table1_{name}.toml"))
+
+
 @pytest.fixture(scope="module", params=ROWS, ids=[r["case"] for r in ROWS])
 def result(request):
     row = request.param
-    return row, geometry_figures(load_case(CASES / f"table1_{row['case']}.toml"))
+    return row, figures(row["case"])
 
 
 def test_profile_ratios_to_table_rounding(result):
@@ -51,7 +66,17 @@ def test_swept_volume_and_power_transfer(result):
         assert fig["Pi_max"] == pytest.approx(fixed["Pi_max"], rel=1e-2)
         return
     assert fig["V_dr_bar"] == pytest.approx(float(row["V_dr_bar"]), rel=0.03)
-    assert fig["Pi_max"] == pytest.approx(float(row["Pi_max"]), rel=0.15)
+    # (Pi_max: test_max_power_transfer_ratio below; this was rel=0.15, which let the
+    # 12 % miss of inner_ev2 and anything within 15 % of the outer rows pass.)
+
+
+@pytest.mark.parametrize("row", [
+    pytest.param(r, marks=pytest.mark.xfail(strict=True, reason=PI_MAX_MISSED[r["case"]]))
+    if r["case"] in PI_MAX_MISSED else r
+    for r in ROWS if r["case"] not in UNREACHABLE], ids=lambda r: r["case"])
+def test_max_power_transfer_ratio(row):
+    assert figures(row["case"])["Pi_max"] == pytest.approx(float(row["Pi_max"]),
+                                                           rel=PI_MAX_REL)
 
 
 def test_power_balance_eq17_18(result):

@@ -26,8 +26,6 @@ from rotorflow.quasi1d import (
 from rotorflow.quasi1d.simulate import build_model
 from rotorflow.quasi1d.synthetic import sin2_table
 
-pytest.importorskip("numba")
-
 # Round-off of the two evaluations: the same operations, compiled (LLVM's pow and exp)
 # or in numpy, on dy of ~1e2 terms each; relative to the largest |dy| of each component
 # over the states compared.

@@ -133,7 +133,17 @@ def test_oil_cools_the_discharge(table):
     wet = simulate(table, _op(oil_mass_ratio=3.0, T_oil_K=310.0), leak).figures
     # 3 kg of oil at cp 1900 per kg of air at cp 1006: the gas ends far cooler
     assert wet["discharge_temperature_K"] < dry["discharge_temperature_K"] - 100.0
+    # With leakage the oil (3 kg per kg of gas trapped at suction closing, less the oil
+    # leaking into the suction plenum) is not 3 kg per kg delivered: gas leaks into the
+    # chamber before it closes and oil leaks out with it (measured 3.015 here); 10 % only
+    # says the oil is injected at the stated ratio at all.
     assert wet["oil_flow_kg_s"] == pytest.approx(3.0 * wet["mass_flow_kg_s"], rel=0.1)
+    # Without leakage the gas trapped is the gas drawn in and delivered, and the oil
+    # supplied is exactly 3 times it (mass conservation; the cycle closes to 1e-6, its
+    # Runge-Kutta steps to round-off: 4e-16 measured).
+    sealed = simulate(table, _op(oil_mass_ratio=3.0, T_oil_K=310.0), Leakage(model="none"))
+    assert sealed.figures["oil_flow_kg_s"] == pytest.approx(
+        3.0 * sealed.figures["mass_flow_kg_s"], rel=1e-9)
 
 
 def test_leakage_grows_with_the_gap(table):

@@ -130,7 +130,6 @@ def test_screenshot_shows_the_headline_first(demo_report, tmp_path):
     shot = tmp_path / "report.png"
     chromium(tmp_path, "--hide-scrollbars", f"--window-size={SHOT_W},{SHOT_H}",
              f"--screenshot={shot}", index.as_uri())
-    pytest.importorskip("matplotlib")
     import matplotlib.image as mpimg
 
     img = mpimg.imread(shot)  # floats in [0, 1]
@@ -189,7 +188,6 @@ def test_report_is_made_from_the_runs_own_data(demo_report):
         assert (demo_report / "report" / f"render_{name}").read_bytes() == \
             (demo_report / "render" / name).read_bytes()
     # Every picture is a real, non-blank PNG.
-    pytest.importorskip("matplotlib")
     import matplotlib.image as mpimg
 
     for name in DEMO_IMAGES:
@@ -200,7 +198,6 @@ def test_report_is_made_from_the_runs_own_data(demo_report):
 
 def test_rotor_picture_follows_the_geometry(tmp_path):
     """Different wraps give different pictures; the same case the same picture size."""
-    pytest.importorskip("pyvista")
     from rotorflow.postprocess.render import render_case
     from rotorflow.workflow.case import load_case
 

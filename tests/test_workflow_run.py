@@ -337,7 +337,6 @@ def test_real_stage_killed_mid_way(tmp_path):
 
 def test_solids_stage_ignores_the_operating_point(tmp_path):
     """Solids come from [export]; the discharge pressure does not rebuild them."""
-    pytest.importorskip("rotorflow.geometry.export", reason="solids export not yet landed")
     build = tmp_path / "build"
     extra = '\n[outputs]\nwant = ["solids"]\n'  # the demo case has an [export] section
     case = case_copy(tmp_path, extra=extra)

@@ -126,7 +126,6 @@ def test_point_case_files_round_trip(tmp_path):
 
 def test_jobqueue_cluster_is_built_from_the_sweep_file(tmp_path):
     """The batch-system route: the SLURM job script carries the sweep file's options."""
-    pytest.importorskip("dask_jobqueue")
     from rotorflow.workflow.dask_cluster import jobqueue_cluster
     from rotorflow.workflow.sweep_file import load_sweep
 

@@ -25,9 +25,20 @@ UNREACHABLE = {"inner_ev5": {"V_dr_bar": 0.3175, "Pi_max": 0.0445}}
 #: 3 %, as V_dr_bar, leaves room for the paper's and our discretisation of the torques
 #: (the outer-driven rows meet it: 0.5 % and 2.1 % measured).
 PI_MAX_REL = 0.03
-#: Rows whose Pi_max misses PI_MAX_REL with no reason found: kept as strict xfails.
-PI_MAX_MISSED = {"inner_ev2": "Pi_max 0.0202 against the table's 0.018 (+12 %), with "
-                              "V_dr_bar within 1 %; both inner-driven rows come out high"}
+#: Rows whose Pi_max misses PI_MAX_REL at the case's inputs: kept as strict xfails.
+PI_MAX_MISSED = {"inner_ev2": "Pi_max 0.0202 against the table's 0.018 (+12 %) at the "
+                              "case's lambda and wrap; within what the table's rounded "
+                              "inputs allow (test_pi_max_within_the_inputs_rounding)"}
+#: The inputs the table's rounding allows for the row that misses (seed 000 gives a/D,
+#: rho/D to 3 decimals and the wrap to the degree): lambda where a/D and rho/D both lie
+#: within 0.0005 of the table (sigma_bar = 1; bounds found by scanning lambda, checked
+#: in the test) and the wrap within half a degree.  Each row is the optimum of Pi_max
+#: (Table 1: "the minimum possible values"), where it is kinked: at inner_ev2's, 0.3 % of
+#: lambda moves it by 14 % and half a degree of wrap by 3.5 %.  (The case's lambda,
+#: 1.39934, puts a/D and rho/D at the box's edge, +0.0005.)  The outer-driven rows meet
+#: PI_MAX_REL at their case's inputs; outer_ev5's box (lambda 1.0571-1.0578) spans
+#: 0.0570-0.0590, 1.8 % above the table's 0.056 (within PI_MAX_REL's discretisation).
+ROUNDING_BOX = {"inner_ev2": (1.3969, 1.3991)}
 
 
 @functools.cache
@@ -77,6 +88,35 @@ def test_swept_volume_and_power_transfer(result):
 def test_max_power_transfer_ratio(row):
     assert figures(row["case"])["Pi_max"] == pytest.approx(float(row["Pi_max"]),
                                                            rel=PI_MAX_REL)
+
+
+@pytest.mark.parametrize("name", sorted(ROUNDING_BOX))
+def test_pi_max_within_the_inputs_rounding(name):
+    """The table's Pi_max (to its rounding) lies between the least and the largest
+    value at the corners of the inputs its rounding allows: a consistency check, not a
+    reproduction (the corners are sampled, so the range is if anything too narrow).
+    inner_ev2 spans 0.0185-0.0228: the table's 0.018 within its rounding of the edge
+    (inside the box, lambda 1.3976 at 136.5 deg gives 0.0180)."""
+    import copy
+    import tomllib
+
+    from rotorflow.workflow.case import case_from_raw
+
+    row = next(r for r in ROWS if r["case"] == name)
+    path = CASES / f"table1_{name}.toml"
+    raw0 = tomllib.loads(path.read_text())
+    wrap = float(row["wrap_outer_deg"])
+    values = [figures(name)["Pi_max"]]
+    for lam in ROUNDING_BOX[name]:
+        for w in (wrap - 0.5, wrap + 0.5):
+            raw = copy.deepcopy(raw0)
+            raw["machine"]["lambda"], raw["sweep"]["wrap_outer_deg"] = lam, w
+            fig = geometry_figures(case_from_raw(raw, path))
+            for key in ("a_over_D", "rho_over_D"):  # (the box is what the table allows)
+                assert fig[key] == pytest.approx(float(row[key]), abs=5e-4), (lam, key)
+            values.append(fig["Pi_max"])
+    table = float(row["Pi_max"])
+    assert min(values) - 5e-4 <= table <= max(values) + 5e-4, (table, values)
 
 
 def test_power_balance_eq17_18(result):

@@ -35,7 +35,14 @@ import numpy as np
 from rotorflow.errors import CaseError
 
 from . import coolprop_bubble
-from .coolprop_table import _state, build_nodes, dew_temperature, reachable_box, suction_state
+from .coolprop_table import (
+    _state,
+    build_nodes,
+    continue_vapour_side,
+    dew_temperature,
+    reachable_box,
+    suction_state,
+)
 from .flows import select
 
 # Grid of the property table: 200 x 200 nodes in (ln rho, u); builds in ~1 s.  The
@@ -70,6 +77,7 @@ class TabulatedFluid:
         x = np.linspace(math.log(rho_lo), math.log(rho_hi), nodes)
         ug = np.linspace(u_lo, u_hi, nodes)
         tab, dome = build_nodes(name, x, ug)
+        continue_vapour_side(name, tab)
         ok = np.all(np.isfinite(tab), axis=0)
         cells = ok[:-1, :-1] & ok[1:, :-1] & ok[:-1, 1:] & ok[1:, 1:]
         bubble = coolprop_bubble.bubble_line(_state(name), ug)

@@ -105,6 +105,8 @@ def test_wet_suction_of_a_pseudo_pure_blend_is_refused(tmp_path):
     ("CoolProp::R32&R125", ["mixture", "CoolProp::R410A"]),
     ("CoolProp::R407C.mix", ["mixture", "pseudo-pure"]),
     ("CoolProp::R134", ["unknown fluid", "did you mean CoolProp::R134a"]),
+    # a CoolProp name without its prefix: the hint named none (only "CoolProp::Air")
+    ("CO2", ["unknown fluid", "did you mean CoolProp::CO2"]),
 ])
 def test_fluid_names_that_are_no_fluid_are_refused_with_a_remedy(tmp_path, name, words):
     line = _refused(tmp_path, _case('fluid = "CoolProp::R134a"', f'fluid = "{name}"'))

@@ -198,7 +198,9 @@ class TabulatedFluid:
         return out_r, out_u
 
     def fill(self, m, U, V, h_in, p2):
-        from scipy.optimize import brentq
+        # (the geometry's bracketed root, not scipy's brentq: importing scipy.optimize
+        # took ~1 s of a real-fluid `simulate`'s ~10 s on a slow machine, for this alone)
+        from rotorflow.geometry.scalar import root
 
         m = np.atleast_1d(m)
         U = np.atleast_1d(U)
@@ -214,7 +216,7 @@ class TabulatedFluid:
             hi = mi * 2.0
             while f(hi) < 0:
                 hi *= 2.0
-            m2.flat[i] = brentq(f, mi, hi, xtol=1e-15 * mi, rtol=1e-14)
+            m2.flat[i] = root(f, mi, hi, xtol=1e-15 * mi)
         return m2, U + (m2 - m) * h_in
 
     def work_isentropic(self, p1, T1, p2, q: float | None = None):

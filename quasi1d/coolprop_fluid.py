@@ -310,7 +310,9 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
     try:
         box = reachable_box(name, ps, pd, Ts, qs, Tw, To, vr)
     except ValueError as exc:
-        raise CaseError(f"CoolProp {name} cannot evaluate the operating point: {exc}") from None
+        raise CaseError(f"CoolProp {name} cannot evaluate the states this operating point "
+                        f"reaches ({_suction_named(name, ps, Ts, qs)}, volume_ratio {vr:g}): "
+                        f"{exc}") from None
     fluid = TabulatedFluid.build(name, *box, nodes=nodes)
     rho_s, u_s = suction_state(name, ps, Ts, qs)[:2]
     if not fluid.in_range(np.array([rho_s]), np.array([u_s])):
@@ -326,12 +328,29 @@ def _refuse_outside_the_equation(name, ps, pd, Ts) -> None:
     """A suction temperature or a pressure beyond the range of CoolProp's equation of
     state for ``name`` is refused (CoolProp extrapolates there without a word)."""
     st = _state(name)
+    if Ts < st.Tmin():
+        # (below the triple point: a solid, which the dew-point check below called
+        # "subcooled liquid" (R134a at 60 K), hiding a Celsius slip)
+        raise CaseError(f"T_suction_K = {Ts:g} is below the range of CoolProp's equation of "
+                        f"state for {name} ({st.Tmin():.2f} K): was it given in Celsius?")
     if Ts > st.Tmax():
         raise CaseError(f"T_suction_K = {Ts:g} is above the range of CoolProp's equation of "
                         f"state for {name} ({st.Tmax():.2f} K)")
     if max(ps, pd) > st.pmax():
         raise CaseError(f"a pressure of {max(ps, pd) / 1e5:g} bar is above the range of "
                         f"CoolProp's equation of state for {name} ({st.pmax() / 1e5:g} bar)")
+
+
+def _suction_named(name, ps, Ts, qs) -> str:
+    """The suction state in words, with its density against the critical one (a pressure
+    in kPa written as bar makes R134a's suction a liquid of ~1300 kg/m3)."""
+    try:
+        rho = suction_state(name, ps, Ts, qs)[0]
+    except ValueError:
+        return f"suction {ps / 1e5:g} bar, {Ts:g} K"
+    rho_c = _state(name).rhomass_critical()
+    dense = f", {rho / rho_c:.1f} times the critical density" if rho > rho_c else ""
+    return f"suction {ps / 1e5:g} bar, {Ts:g} K: {rho:.4g} kg/m3{dense}"
 
 
 def _refuse_squeezed_past_the_equation(name, ps, Ts, vr) -> None:

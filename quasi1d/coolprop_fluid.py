@@ -288,7 +288,26 @@ def table_row(table, r, k, tx, tu, nu):
 def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
     """CoolProp's ``name`` tabulated over the states reachable from suction (ps, Ts, or
     quality qs for a wet suction), discharge pressure pd, wall and oil temperatures Tw, To
-    and volume ratio vr (the range: :func:`.coolprop_table.reachable_box`)."""
+    and volume ratio vr (the range: :func:`checked_box`)."""
+    fluid = TabulatedFluid.build(name, *checked_box(name, ps, pd, Ts, Tw, To, vr, qs),
+                                 nodes=nodes)
+    rho_s, u_s = suction_state(name, ps, Ts, qs)[:2]
+    if not fluid.in_range(np.array([rho_s]), np.array([u_s])):
+        # the pseudo-pure blends (R410A, R404A, R507A): CoolProp has no (rho, u) flash
+        # inside their dome, so a wet suction has no table cells
+        raise CaseError(f"CoolProp's {name} cannot be evaluated by (density, energy) at the "
+                        f"suction state (its two-phase flash fails for pseudo-pure blends): "
+                        f"give a superheated suction")
+    return fluid
+
+
+def checked_box(name, ps, pd, Ts, Tw, To, vr, qs=None):
+    """The range of :func:`.coolprop_table.reachable_box` for this point, once the point
+    passes the refusals (CaseError): a suction off the saturation temperature its quality
+    implies, outside the equation of state, inside the dome, squeezed past the equation.
+    (A performance map builds its shared table from its corners' ranges through here, so
+    that they are refused as a single point is: it called reachable_box directly, and a
+    suction pressure range reaching into the dome ended in a traceback.)"""
     if qs is not None:
         Tsat = suction_state(name, ps, Ts, qs)[4]
         if abs(Ts - Tsat) > SATURATION_T_TOLERANCE_K:
@@ -308,20 +327,11 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
     if qs is None:
         _refuse_squeezed_past_the_equation(name, ps, Ts, vr)
     try:
-        box = reachable_box(name, ps, pd, Ts, qs, Tw, To, vr)
+        return reachable_box(name, ps, pd, Ts, qs, Tw, To, vr)
     except ValueError as exc:
         raise CaseError(f"CoolProp {name} cannot evaluate the states this operating point "
                         f"reaches ({_suction_named(name, ps, Ts, qs)}, volume_ratio {vr:g}): "
                         f"{exc}") from None
-    fluid = TabulatedFluid.build(name, *box, nodes=nodes)
-    rho_s, u_s = suction_state(name, ps, Ts, qs)[:2]
-    if not fluid.in_range(np.array([rho_s]), np.array([u_s])):
-        # the pseudo-pure blends (R410A, R404A, R507A): CoolProp has no (rho, u) flash
-        # inside their dome, so a wet suction has no table cells
-        raise CaseError(f"CoolProp's {name} cannot be evaluated by (density, energy) at the "
-                        f"suction state (its two-phase flash fails for pseudo-pure blends): "
-                        f"give a superheated suction")
-    return fluid
 
 
 def _refuse_outside_the_equation(name, ps, pd, Ts) -> None:

@@ -173,6 +173,10 @@ class TabulatedFluid:
     def T_ph(self, p, h):
         return self._upd("HmassP_INPUTS", h, p).T()
 
+    def T_hottest(self, p) -> float:
+        """The hottest temperature at p whose state the table holds (its highest u)."""
+        return self._upd("PUmass_INPUTS", p, self.u0 + self.du * (self.nu - 1)).T()
+
     def quality_ph(self, p, h) -> float | None:
         """The vapour's mass fraction at (p, h): 1 superheated, 0 subcooled, None above
         the critical pressure (no phases to tell apart)."""

@@ -35,7 +35,14 @@ import numpy as np
 from rotorflow.errors import CaseError
 
 from . import coolprop_bubble
-from .coolprop_table import _state, build_nodes, dew_temperature, reachable_box, suction_state
+from .coolprop_table import (
+    _state,
+    build_nodes,
+    continue_vapour_side,
+    dew_temperature,
+    reachable_box,
+    suction_state,
+)
 from .flows import select
 
 # Grid of the property table: 200 x 200 nodes in (ln rho, u); builds in ~1 s.  The
@@ -70,6 +77,7 @@ class TabulatedFluid:
         x = np.linspace(math.log(rho_lo), math.log(rho_hi), nodes)
         ug = np.linspace(u_lo, u_hi, nodes)
         tab, dome = build_nodes(name, x, ug)
+        continue_vapour_side(name, tab)
         ok = np.all(np.isfinite(tab), axis=0)
         cells = ok[:-1, :-1] & ok[1:, :-1] & ok[:-1, 1:] & ok[1:, 1:]
         bubble = coolprop_bubble.bubble_line(_state(name), ug)
@@ -165,6 +173,10 @@ class TabulatedFluid:
     def T_ph(self, p, h):
         return self._upd("HmassP_INPUTS", h, p).T()
 
+    def T_hottest(self, p) -> float:
+        """The hottest temperature at p whose state the table holds (its highest u)."""
+        return self._upd("PUmass_INPUTS", p, self.u0 + self.du * (self.nu - 1)).T()
+
     def quality_ph(self, p, h) -> float | None:
         """The vapour's mass fraction at (p, h): 1 superheated, 0 subcooled, None above
         the critical pressure (no phases to tell apart)."""
@@ -190,7 +202,9 @@ class TabulatedFluid:
         return out_r, out_u
 
     def fill(self, m, U, V, h_in, p2):
-        from scipy.optimize import brentq
+        # (the geometry's bracketed root, not scipy's brentq: importing scipy.optimize
+        # took ~1 s of a real-fluid `simulate`'s ~10 s on a slow machine, for this alone)
+        from rotorflow.geometry.scalar import root
 
         m = np.atleast_1d(m)
         U = np.atleast_1d(U)
@@ -206,7 +220,7 @@ class TabulatedFluid:
             hi = mi * 2.0
             while f(hi) < 0:
                 hi *= 2.0
-            m2.flat[i] = brentq(f, mi, hi, xtol=1e-15 * mi, rtol=1e-14)
+            m2.flat[i] = root(f, mi, hi, xtol=1e-15 * mi)
         return m2, U + (m2 - m) * h_in
 
     def work_isentropic(self, p1, T1, p2, q: float | None = None):
@@ -278,7 +292,26 @@ def table_row(table, r, k, tx, tu, nu):
 def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
     """CoolProp's ``name`` tabulated over the states reachable from suction (ps, Ts, or
     quality qs for a wet suction), discharge pressure pd, wall and oil temperatures Tw, To
-    and volume ratio vr (the range: :func:`.coolprop_table.reachable_box`)."""
+    and volume ratio vr (the range: :func:`checked_box`)."""
+    fluid = TabulatedFluid.build(name, *checked_box(name, ps, pd, Ts, Tw, To, vr, qs),
+                                 nodes=nodes)
+    rho_s, u_s = suction_state(name, ps, Ts, qs)[:2]
+    if not fluid.in_range(np.array([rho_s]), np.array([u_s])):
+        # the pseudo-pure blends (R410A, R404A, R507A): CoolProp has no (rho, u) flash
+        # inside their dome, so a wet suction has no table cells
+        raise CaseError(f"CoolProp's {name} cannot be evaluated by (density, energy) at the "
+                        f"suction state (its two-phase flash fails for pseudo-pure blends): "
+                        f"give a superheated suction")
+    return fluid
+
+
+def checked_box(name, ps, pd, Ts, Tw, To, vr, qs=None):
+    """The range of :func:`.coolprop_table.reachable_box` for this point, once the point
+    passes the refusals (CaseError): a suction off the saturation temperature its quality
+    implies, outside the equation of state, inside the dome, squeezed past the equation.
+    (A performance map builds its shared table from its corners' ranges through here, so
+    that they are refused as a single point is: it called reachable_box directly, and a
+    suction pressure range reaching into the dome ended in a traceback.)"""
     if qs is not None:
         Tsat = suction_state(name, ps, Ts, qs)[4]
         if abs(Ts - Tsat) > SATURATION_T_TOLERANCE_K:
@@ -298,30 +331,40 @@ def tabulated(name, ps, pd, Ts, Tw, To, vr, qs=None, nodes=TABLE_NODES):
     if qs is None:
         _refuse_squeezed_past_the_equation(name, ps, Ts, vr)
     try:
-        box = reachable_box(name, ps, pd, Ts, qs, Tw, To, vr)
+        return reachable_box(name, ps, pd, Ts, qs, Tw, To, vr)
     except ValueError as exc:
-        raise CaseError(f"CoolProp {name} cannot evaluate the operating point: {exc}") from None
-    fluid = TabulatedFluid.build(name, *box, nodes=nodes)
-    rho_s, u_s = suction_state(name, ps, Ts, qs)[:2]
-    if not fluid.in_range(np.array([rho_s]), np.array([u_s])):
-        # the pseudo-pure blends (R410A, R404A, R507A): CoolProp has no (rho, u) flash
-        # inside their dome, so a wet suction has no table cells
-        raise CaseError(f"CoolProp's {name} cannot be evaluated by (density, energy) at the "
-                        f"suction state (its two-phase flash fails for pseudo-pure blends): "
-                        f"give a superheated suction")
-    return fluid
+        raise CaseError(f"CoolProp {name} cannot evaluate the states this operating point "
+                        f"reaches ({_suction_named(name, ps, Ts, qs)}, volume_ratio {vr:g}): "
+                        f"{exc}") from None
 
 
 def _refuse_outside_the_equation(name, ps, pd, Ts) -> None:
     """A suction temperature or a pressure beyond the range of CoolProp's equation of
     state for ``name`` is refused (CoolProp extrapolates there without a word)."""
     st = _state(name)
+    if Ts < st.Tmin():
+        # (below the triple point: a solid, which the dew-point check below called
+        # "subcooled liquid" (R134a at 60 K), hiding a Celsius slip)
+        raise CaseError(f"T_suction_K = {Ts:g} is below the range of CoolProp's equation of "
+                        f"state for {name} ({st.Tmin():.2f} K): was it given in Celsius?")
     if Ts > st.Tmax():
         raise CaseError(f"T_suction_K = {Ts:g} is above the range of CoolProp's equation of "
                         f"state for {name} ({st.Tmax():.2f} K)")
     if max(ps, pd) > st.pmax():
         raise CaseError(f"a pressure of {max(ps, pd) / 1e5:g} bar is above the range of "
                         f"CoolProp's equation of state for {name} ({st.pmax() / 1e5:g} bar)")
+
+
+def _suction_named(name, ps, Ts, qs) -> str:
+    """The suction state in words, with its density against the critical one (a pressure
+    in kPa written as bar makes R134a's suction a liquid of ~1300 kg/m3)."""
+    try:
+        rho = suction_state(name, ps, Ts, qs)[0]
+    except ValueError:
+        return f"suction {ps / 1e5:g} bar, {Ts:g} K"
+    rho_c = _state(name).rhomass_critical()
+    dense = f", {rho / rho_c:.1f} times the critical density" if rho > rho_c else ""
+    return f"suction {ps / 1e5:g} bar, {Ts:g} K: {rho:.4g} kg/m3{dense}"
 
 
 def _refuse_squeezed_past_the_equation(name, ps, Ts, vr) -> None:

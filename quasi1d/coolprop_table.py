@@ -173,3 +173,38 @@ def _quotient(p0, p_at, rho, u, dr, du):
     if inside:
         return (p0 - pm) / h
     raise ValueError("a two-phase node without two-phase neighbours")
+
+
+#: Nodes inside a pseudo-pure blend's dome continued from its vapour, per row of density.
+VAPOUR_GHOSTS = 1
+
+
+def continue_vapour_side(name: str, tab: np.ndarray) -> None:
+    """Fill, in place, the first VAPOUR_GHOSTS nodes inside the dome of a pseudo-pure
+    blend (R404A, R410A, ...) in each row of density of the table (5, nx, nu) with the
+    vapour's continuation, linear in u through the two vapour nodes above them.
+
+    CoolProp's (rho, u) flash fails inside a blend's dome (no equilibrium mixture of one
+    pseudo-pure fluid across its glide), so those nodes were NaN, and every cell the dew
+    line cuts with them: a suction within a cell of the dew line (R404A at 4 bar, 0.6 K
+    of superheat) left the table at the first compression step (step size underflow),
+    and one a cell closer was refused as not superheated.  The continuation is the
+    metastable vapour's p, T and derivatives, which meet the dome's at the dew line
+    (continuous p and T, the kink at the line); deeper nodes stay NaN, out of the table.
+    A pure fluid's dome nodes are CoolProp's own (untouched)."""
+    import CoolProp.CoolProp as CP
+
+    if CP.get_fluid_param_string(name, "pure") != "false":
+        return
+    finite = np.all(np.isfinite(tab), axis=0)
+    for i in range(tab.shape[1]):
+        vap = np.nonzero(finite[i])[0]
+        if vap.size < 2 or vap[0] == 0 or vap[1] != vap[0] + 1:
+            continue
+        k = vap[0]
+        top, above = tab[:, i, k], tab[:, i, k + 1]
+        for g in range(1, min(VAPOUR_GHOSTS, k) + 1):
+            ghost = top - g * (above - top)
+            if np.isfinite(tab[0, i, k - g]) or not np.all(ghost[2:] > 0.0):
+                break
+            tab[:, i, k - g] = ghost

@@ -22,6 +22,7 @@ the difference changes sign.  A dry gas only: an oil-flooded plenum is set by th
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -77,8 +78,16 @@ def settle(build, solve, model, sol):
         raise CaseError("the delivered gas is colder than a discharge plenum at "
                         f"{lo:.1f} K (the coldest chamber's, or the dew point's): no "
                         "delivered state found ([ports] discharge_plenum)")
+    # (a real fluid's table ends at its hottest state: a bracket widened past it filled the
+    # chambers with gas off the table, ammonia 3 -> 12 bar from 454 K to 681 K, where the
+    # plenum's state is near 553 K)
+    cap = fluid.T_hottest(p_d) if hasattr(fluid, "T_hottest") else math.inf
     while gap(hi) > 0.0:
-        hi *= WIDEN
+        if hi >= cap:
+            raise CaseError(f"the delivered gas is hotter than the hottest discharge plenum "
+                            f"the fluid's table holds ({cap:.1f} K): no delivered state "
+                            "found ([ports] discharge_plenum)")
+        hi = min(hi * WIDEN, cap)
     T = brentq(gap, lo, hi, xtol=T_TOL, maxiter=MAX_SOLVES)
     m, s, _ = runs[min(runs, key=lambda t: abs(t - T))]
     return m, s

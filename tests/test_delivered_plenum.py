@@ -83,3 +83,25 @@ def test_a_refrigerants_plenum_stays_above_its_dew_point():
     assert fig["discharge_plenum_K"] > CP.PropsSI("T", "P", 9e5, "Q", 1, "R134a")
     assert fig["discharge_temperature_K"] == pytest.approx(fig["discharge_plenum_K"], abs=0.5)
     assert fig["discharge_quality"] == 1
+
+
+def test_a_hot_plenums_bracket_stays_on_the_fluids_table():
+    """Ammonia 3 -> 12 bar on the leaky refrigeration machine: the delivered gas (~553 K)
+    is hotter than every chamber of the isentropic-plenum run (454 K), and the bracket's
+    widening by 1.5 went to 681 K, past the table's hottest state at 12 bar (~576 K):
+    exit 1, "chamber state left the range of the fluid's property table".  It now stops
+    at that hottest state, and the plenum settles where the table holds it."""
+    import tomllib
+
+    from rotorflow.geometry.summary import chamber_table
+
+    case = load_case(CASES / "refrigeration_r134a.toml")
+    raw = tomllib.loads((CASES / "refrigeration_r134a.toml").read_text())
+    raw["operating"].update(fluid="CoolProp::Ammonia", p_discharge_bar=12.0, T_suction_K=270.0)
+    raw["ports"] = {"discharge_plenum": "delivered"}
+    held = simulate(chamber_table(case), *case_settings(raw, "ammonia"))
+    fig = held.figures
+    assert fig["converged"]
+    assert fig["discharge_temperature_K"] == pytest.approx(fig["discharge_plenum_K"], abs=0.5)
+    assert fig["discharge_plenum_K"] < held.solution.model.fluid.T_hottest(12e5)
+    assert fig["chamber_temperature_max_K"] > 454.0

@@ -159,3 +159,20 @@ def test_coolprop_map_shares_one_table_and_matches_per_point_tables(tmp_path, mo
     fig = json.loads(capsys.readouterr().out)
     assert float(row["mass_flow_kg_s"]) == pytest.approx(fig["mass_flow_kg_s"], rel=2e-3)
     assert float(row["indicated_power_W"]) == pytest.approx(fig["indicated_power_W"], rel=2e-3)
+
+
+def test_coolprop_map_whose_suction_range_enters_the_dome_is_refused(tmp_path):
+    # R290 at 278.15 K: saturated at 5.5 bar.  The shared table's corners bypassed the
+    # single point's refusals; the 6 bar corner's liquid suction, squeezed along its
+    # isentrope, ended in a traceback from CoolProp's melting line (exit 1)
+    raw = tomllib.loads((ROOT / "examples" / "heat_pump_r290.toml").read_text())
+    raw["map"] = {"speed_rpm": [2000, 4000], "p_suction_bar": [3.0, 6.0], "points": [2, 3]}
+    case = tmp_path / "hp.toml"
+    case.write_text(dumps_toml(raw))
+    out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", "map", str(case),
+                          "--serial", "--build", str(tmp_path / "build")],
+                         capture_output=True, text=True, cwd=tmp_path)
+    assert out.returncode == 2, out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1, out.stderr
+    assert "6 bar" in out.stderr and "subcooled liquid" in out.stderr, out.stderr
+    assert not (tmp_path / "build").exists()

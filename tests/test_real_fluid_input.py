@@ -105,6 +105,8 @@ def test_wet_suction_of_a_pseudo_pure_blend_is_refused(tmp_path):
     ("CoolProp::R32&R125", ["mixture", "CoolProp::R410A"]),
     ("CoolProp::R407C.mix", ["mixture", "pseudo-pure"]),
     ("CoolProp::R134", ["unknown fluid", "did you mean CoolProp::R134a"]),
+    # a CoolProp name without its prefix: the hint named none (only "CoolProp::Air")
+    ("CO2", ["unknown fluid", "did you mean CoolProp::CO2"]),
 ])
 def test_fluid_names_that_are_no_fluid_are_refused_with_a_remedy(tmp_path, name, words):
     line = _refused(tmp_path, _case('fluid = "CoolProp::R134a"', f'fluid = "{name}"'))
@@ -158,3 +160,20 @@ def test_a_state_off_the_property_table_says_which_way_it_left():
     assert "colder" in f.out_of_range([rho_mid], [f.u0 - f.du])
     assert "denser" in f.out_of_range([rho_hi * 1.5], [u_mid])
     assert "thinner" in f.out_of_range([math.exp(f.x0) / 1.5], [u_mid])
+
+
+def test_a_suction_below_the_triple_point_is_named_a_celsius_slip(tmp_path):
+    # 60 passes the 50 K plausibility floor; below R134a's triple point (169.85 K) the
+    # dew-point check called it "subcooled liquid"
+    line = _refused(tmp_path, _case("T_suction_K = 285", "T_suction_K = 60"))
+    assert "169.85 K" in line and "Celsius" in line and "liquid" not in line, line
+
+
+def test_pressures_in_kpa_name_the_dense_suction(tmp_path):
+    # 300 and 650 "bar" (kPa meant): a liquid at 1351 kg/m3 whose range CoolProp cannot
+    # bracket; the line gave CoolProp's Brent message alone
+    text = _case("p_suction_bar = 3.0", "p_suction_bar = 300").replace(
+        "p_discharge_bar = 9.0", "p_discharge_bar = 650")
+    line = _refused(tmp_path, text)
+    rho = CP.PropsSI("D", "P", 300e5, "T", 285.0, "R134a")
+    assert f"{rho:.4g} kg/m3" in line and "critical density" in line, line

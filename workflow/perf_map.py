@@ -152,8 +152,7 @@ def shared_fluid(table, raw: dict, spec: MapSpec, where: str):
     corners' ranges), or None for the gas models (air's table is shared per process
     already). Building a table takes ~1 s; a 10 x 10 map would build 100."""
     from rotorflow.quasi1d import case_settings
-    from rotorflow.quasi1d.coolprop_fluid import TabulatedFluid
-    from rotorflow.quasi1d.coolprop_table import reachable_box
+    from rotorflow.quasi1d.coolprop_fluid import TabulatedFluid, checked_box
     from rotorflow.quasi1d.simulate import chamber_of
 
     if not str(raw["operating"].get("fluid", "")).startswith("CoolProp::"):
@@ -163,10 +162,10 @@ def shared_fluid(table, raw: dict, spec: MapSpec, where: str):
         for p in (spec.pressures[0], spec.pressures[-1]):
             op, _, _, num, _ = case_settings(point_raw(raw, spec, n, p), where)
             geo = chamber_of(table, op, num)
-            boxes.append(reachable_box(op.fluid.split("::", 1)[1], op.p_suction_Pa,
-                                       op.p_discharge_Pa, op.T_suction_K, op.suction_quality,
-                                       op.wall_temperature_K, op.oil_temperature_K,
-                                       geo.v_max / geo.v_discharge))
+            boxes.append(checked_box(op.fluid.split("::", 1)[1], op.p_suction_Pa,
+                                     op.p_discharge_Pa, op.T_suction_K,
+                                     op.wall_temperature_K, op.oil_temperature_K,
+                                     geo.v_max / geo.v_discharge, op.suction_quality))
     b = np.array(boxes)
     return TabulatedFluid.build(raw["operating"]["fluid"].split("::", 1)[1], b[:, 0].min(),
                                 b[:, 1].max(), b[:, 2].min(), b[:, 3].max(),

@@ -515,8 +515,11 @@ def test_wet_pumping_through_the_bubble_line_converges_and_conserves(q):
     # at 0.21 rad, 0.1 at the 60-s budget in the first period; now 3-4 s.
     from rotorflow.quasi1d.synthetic import sin2_table
 
+    # (a budget that holds on a slow, loaded machine: 11 s alone on one 2.5 times slower
+    # than the sessions' before, past 30 s there under make test's load, 2026-12-01; run
+    # time is the benchmarks' to check, not this test's)
     res = simulate(sin2_table(rows=721), _pentane_op(q), Leakage(gap_m=20e-6, model="nozzle"),
-                   numerics=Numerics(max_seconds=30))
+                   numerics=Numerics(max_seconds=300))
     fig = res.figures
     assert fig["converged"], fig.get("message")
     assert fig["mass_balance_error"] < 1e-6 and fig["energy_balance_error"] < 1e-6

@@ -112,6 +112,9 @@ def test_a_liquid_drawn_in_is_no_port_that_cannot_empty_the_chamber(tmp_path):
     # (0.55 / (1 / 2 - 0.45) = 11), not by a port that fails (it was warned of as one)
     text = DEFAULT.replace("speed_rpm = 3000", "speed_rpm = 3000\ngas_volume_fraction = 0.55"
                            "\nliquid_density_kg_m3 = 998\nliquid_cp_J_kgK = 4180")
+    # (its numpy path took 65 s on a slow, loaded machine, 2026-12-01: past the default
+    # 60-s budget, which is the benchmarks' business, not this test's)
+    text += "\n[numerics]\nmax_seconds = 600\n"
     out, fig = _simulate(tmp_path, text)
     assert out.returncode == 0, out.stderr
     assert fig["chamber_pressure_max_Pa"] > 2.0 * 2.6e5 and "warning" not in fig

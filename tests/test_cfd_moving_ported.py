@@ -41,7 +41,10 @@ def test_slots_map_onto_the_models_own_per_slot_traces(model):
     theta = np.asarray(mach["theta_rad"])
     # model slot k at table angle theta holds the chamber of table age theta + k P: the
     # CFD's slot k + 1 at machine angle theta + origin - P
-    pick = np.linspace(0, len(theta) - 1, 9).astype(int)
+    # (not the traces' first and last samples: there a chamber is born or dies at the
+    # sample itself, and whether the mapped slot holds it turns on the angle's last bits,
+    # which differ between machines: NaN at the first sample on an AVX2 one, 2026-12-01)
+    pick = np.linspace(1, len(theta) - 2, 9).astype(int)
     got = slot_pressures(model, theta[pick] + model.origin - model.period)
     want = np.asarray(mach["p_Pa"])[pick]
     n = min(got.shape[1], want.shape[1])

@@ -125,9 +125,13 @@ def test_the_recorded_ported_comparison_is_what_its_data_give(gap_um):
     again = comparison(cfd, period, models)
     assert again["periodicity"]["pairs"] == pytest.approx(rec["periodicity"]["pairs"],
                                                           rel=1e-9)
+    # (abs 1e-6 as well: the figures are pressure errors over the traces' swing, of the
+    # order of the pressures themselves, and the models' periodic state is converged to
+    # 1e-6 in p (Numerics.cycle_rtol), so a figure of 2e-3 may move by more than its own
+    # 1e-6: 2.9e-8 between this AVX2 machine and the record's, 2026-12-01)
     for name, m in rec["models"].items():
         assert _flat(again["models"][name]["errors"]) == pytest.approx(_flat(m["errors"]),
-                                                                       rel=1e-6)
+                                                                       rel=1e-6, abs=1e-6)
     # a perturbed CFD trace changes the figures: the check can fail
     bad = {**cfd, "p": {k: [v * 1.01 for v in vals] for k, vals in cfd["p"].items()}}
     m = next(iter(rec["models"].values()))

@@ -362,6 +362,13 @@ class Ports:
 
     KEYS = ("model", "coefficient", "discharge_plenum")
 
+    @property
+    def reads_areas(self) -> bool:
+        """Whether the ports flow through the chamber table's port areas (nozzle ports);
+        ideal ones follow its port timing alone (:mod:`.network`), so a table for them
+        may leave the areas out (:func:`rotorflow.geometry.summary.chamber_table`)."""
+        return self.model != "ideal"
+
     @classmethod
     def from_section(cls, d: dict, where: str = "the case") -> Ports:
         s = "ports"

@@ -48,7 +48,7 @@ def build_model(table, operating: Operating, leakage: Leakage | None = None,
     leakage = leakage or Leakage(model="none")
     ports = ports or Ports()
     numerics = numerics or Numerics()
-    if ports.model != "ideal" and not getattr(table, "port_areas", True):
+    if ports.reads_areas and not getattr(table, "port_areas", True):
         raise CaseError(f"{ports.model} ports need the chamber table's port areas, and this "
                         "table was made without them (for ideal ports)")
     geo = chamber_of(table, operating, numerics)

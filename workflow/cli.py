@@ -81,8 +81,7 @@ def cmd_simulate(args) -> int:
         raise CaseError(f"[operating] of {where} needs p_suction_bar (and the rest of the "
                         "operating point) to simulate")
     settings = case_settings(raw, where)  # (refused before the geometry's time is spent)
-    ports = settings[2]
-    result = simulate(chamber_table(case, port_areas=ports.model != "ideal"), *settings)
+    result = simulate(chamber_table(case, port_areas=settings[2].reads_areas), *settings)
     if args.traces:
         out = Path(args.traces)
         out.parent.mkdir(parents=True, exist_ok=True)

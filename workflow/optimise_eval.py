@@ -71,7 +71,7 @@ def _quasi1d(case, machine, raw: dict, where: str) -> dict:
     from rotorflow.quasi1d import case_settings, simulate
 
     settings = case_settings(raw, where)
-    table = chamber_table(case, machine, port_areas=settings[2].model != "ideal")
+    table = chamber_table(case, machine, port_areas=settings[2].reads_areas)
     result = simulate(table, *settings)
     return _flat("quasi1d", result.summary())
 

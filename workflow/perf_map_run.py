@@ -44,7 +44,7 @@ def run_map(case_path: Path, out: Path | None = None, *, cluster: dict | None = 
     jobs = [point_raw(case.raw, spec, n, p) for n in spec.speeds for p in spec.pressures]
     for raw in jobs:
         ports = case_settings(raw, where)[2]  # (the map varies speed and pressure only)
-    table = chamber_table(case, port_areas=ports.model != "ideal")
+    table = chamber_table(case, port_areas=ports.reads_areas)
     fluid = shared_fluid(table, case.raw, spec, where)
     rows, where_run = _compute(table, fluid, jobs, where, cluster, serial, progress)
     out = Path(out) if out else Path("build") / "map" / case.name

@@ -217,10 +217,8 @@ class TabulatedFluid:
                 uu = (Ui + (mm - mi) * h_in) / mm
                 return self._upd("DmassUmass_INPUTS", mm / Vi, uu).p() - p2
 
-            hi = mi * 2.0
-            while f(hi) < 0:
-                hi *= 2.0
-            m2.flat[i] = root(f, mi, hi, xtol=1e-15 * mi)
+            lo, hi = _bracket(f, mi)
+            m2.flat[i] = root(f, lo, hi, xtol=1e-15 * mi)
         return m2, U + (m2 - m) * h_in
 
     def work_isentropic(self, p1, T1, p2, q: float | None = None):
@@ -247,6 +245,24 @@ class TabulatedFluid:
             return None
         st = self._upd("PT_INPUTS", p2, T1)
         return (st.hmass() - h1) - T1 * (st.smass() - s1)
+
+
+def _bracket(f, m, tries=60):
+    """lo, hi about m with f(lo) < 0 <= f(hi), f rising.  Doubling the mass of a wet
+    chamber under a liquid-dense plenum can step past the liquid's density, where CoolProp
+    refuses the state (beyond the melting line): such a trial is halved back towards the
+    last mass that fell short, since the root lies below any mass CoolProp cannot hold."""
+    lo, hi = m, 2.0 * m
+    for _ in range(tries):
+        try:
+            high = f(hi) >= 0
+        except ValueError:
+            hi = 0.5 * (lo + hi)
+            continue
+        if high:
+            return lo, hi
+        lo, hi = hi, 2.0 * hi
+    raise ValueError(f"no mass from {m:.6g} kg fills the chamber to the plenum's pressure")
 
 
 def table_state(rho, u, x0, dx, u0, du, nu, table):

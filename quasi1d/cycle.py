@@ -226,13 +226,15 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
         if method not in ("radau", "bdf"):
             replay = run.steps
         y_end = run.y[0]
-        _check_states(model, y_end)
-        z_next = model.shift(y_end)
-        dp, dT = _changes(model, z, z_next)
-        mc, ec, _, _ = balances(model, z, y_end)
-        if max(dp, dT) < num.cycle_rtol and max(mc, ec) < num.balance_tol:
-            converged = True
-            break
+        if _rejected(model, y_end, anderson is None and newton and nw.best is not None):
+            z_next = np.full_like(z, np.nan)  # (a residual that is never the best)
+        else:
+            z_next = model.shift(y_end)
+            dp, dT = _changes(model, z, z_next)
+            mc, ec, _, _ = balances(model, z, y_end)
+            if max(dp, dT) < num.cycle_rtol and max(mc, ec) < num.balance_tol:
+                converged = True
+                break
         if anderson is not None:
             z = _anderson(model, anderson, z, z_next, idx, scales)
             continue
@@ -261,7 +263,8 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
             nw.best = None
     if not converged:
         best = nw.best
-        if best is not None and best[0] < float(np.max(np.abs(z_next - z)[idx] / scales[idx])):
+        if best is not None and not float(np.max(np.abs(z_next - z)[idx] / scales[idx])) \
+                <= best[0]:
             _, z, run, _, _, (dp, dT, mc, ec) = best
         message = (message or f"cycle not converged after {num.max_cycles} periods: ") + (
             f"relative change of p {dp:.2e}, T {dT:.2e}, mass balance {mc:.2e}, "
@@ -426,6 +429,23 @@ def _plausible(model, z) -> bool:
         if np.any(V <= 0):
             return False
     return model.fluid.in_range(m / V, z[n + 1:2 * n][live] / m)
+
+
+def _rejected(model, y_end, retreat: bool) -> bool:
+    """Whether a period from a damped Newton iterate ended outside the fluid's table or
+    unphysical (:func:`_check_states`): where ``retreat``, that iterate is rejected as
+    one whose residual grew, and Newton halves its step from the best iterate.  A wet
+    pentane chamber's Newton step, 1/32 of the way from an iterate that stalled, filled
+    its chambers from the plenum past the table's densest liquid (on an AVX2 machine;
+    the same solve converged on the AVX-512 ones, the rounding of their BLAS kernels
+    giving another step); a plain period or a first iterate has nothing to retreat to."""
+    try:
+        _check_states(model, y_end)
+    except IntegrationError:
+        if retreat:
+            return True
+        raise
+    return False
 
 
 def _check_states(model, y):

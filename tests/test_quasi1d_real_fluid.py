@@ -600,3 +600,26 @@ def test_a_plain_period_that_does_not_gain_leaves_newtons_iteration_as_it_was(mo
     assert [b for b in with_probe if b > 1] == [b for b in periods if b > 1]
     for key in ("mass_flow_kg_s", "indicated_power_W", "discharge_temperature_K"):
         assert probed.figures[key] == newton.figures[key], key
+
+
+@pytest.mark.parametrize("T_in", [250.0, 280.0])
+def test_filling_a_wet_chamber_with_cold_liquid_stops_at_the_plenum_pressure(T_in):
+    # coolprop_fluid._bracket: a chamber half liquid (300 kg/m3 of n-pentane at 3 bar)
+    # that an ideal port fills from a plenum of cold liquid at 4 bar: doubling its mass
+    # to bracket the fill stepped to 1200 kg/m3, past the liquid's density, where
+    # CoolProp refuses the state ("below melting line"); the fill escaped the solver as
+    # CoolProp's ValueError.  The filled state is checked by CoolProp's own flash: at
+    # the plenum pressure, with the energy the plenum's enthalpy brought.
+    from rotorflow.quasi1d.coolprop_fluid import TabulatedFluid
+
+    fluid = TabulatedFluid.build("n-Pentane", 0.1, 700.0, -4e4, 4e5, nodes=5)
+    st = CP.AbstractState("HEOS", "n-Pentane")
+    V = 1e-3
+    st.update(CP.DmassP_INPUTS, 300.0, 3e5)
+    m, U = 300.0 * V, st.umass() * 300.0 * V
+    st.update(CP.PT_INPUTS, 4e5, T_in)
+    h_in = st.hmass()
+    m2, U2 = fluid.fill(m, U, V, h_in, 4e5)
+    assert U2[0] == pytest.approx(U + (m2[0] - m) * h_in, rel=1e-12)
+    st.update(CP.DmassUmass_INPUTS, m2[0] / V, U2[0] / m2[0])
+    assert st.p() == pytest.approx(4e5, rel=1e-9)

@@ -30,7 +30,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from .integrate import IntegrationError, OverTime, PeriodRun, integrate_period
+from .cycle_states import plausible, rejected
+from .integrate import OverTime, PeriodRun, integrate_period
 from .model import ChamberModel
 from .network import ACC_H_DIS, ACC_H_SUC, ACC_M_DIS, ACC_M_SUC, ACC_Q, ACC_W
 from .settings import Numerics
@@ -169,7 +170,7 @@ def _damped(model, best, idx, lam):
     for shrink in (1.0, 0.5, 0.25):
         cand = best[1].copy()
         cand[idx] += lam * shrink * best[3]
-        if _plausible(model, cand):
+        if plausible(model, cand):
             return cand
     return best[4]
 
@@ -226,7 +227,7 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
         if method not in ("radau", "bdf"):
             replay = run.steps
         y_end = run.y[0]
-        if _rejected(model, y_end, anderson is None and newton and nw.best is not None):
+        if rejected(model, y_end, anderson is None and newton and nw.best is not None):
             z_next = np.full_like(z, np.nan)  # (a residual that is never the best)
         else:
             z_next = model.shift(y_end)
@@ -262,17 +263,24 @@ def _solve(model: ChamberModel, num: Numerics, record: bool) -> CycleSolution:
             z = nw.best[4]
             nw.best = None
     if not converged:
-        best = nw.best
-        if best is not None and not float(np.max(np.abs(z_next - z)[idx] / scales[idx])) \
-                <= best[0]:
-            _, z, run, _, _, (dp, dT, mc, ec) = best
-        message = (message or f"cycle not converged after {num.max_cycles} periods: ") + (
-            f"relative change of p {dp:.2e}, T {dT:.2e}, mass balance {mc:.2e}, "
-            f"energy balance {ec:.2e}")
+        z, run, message = _unconverged(nw.best, z, z_next, run, idx, scales, message, num,
+                                       (dp, dT, mc, ec))
     mc, ec, cm, ce = balances(model, z, run.y[0])
     model.cache.clear()  # the result keeps the model; not its geometry cache
     return CycleSolution(model, z, run, cycles, converged, message, dp, dT, mc, ec, cm, ce,
                          n_rhs)
+
+
+def _unconverged(best, z, z_next, run, idx, scales, message, num, figures):
+    """(state, its period, message) of a solve that did not converge: the best iterate
+    where its residual is below the last's (or the last period was rejected)."""
+    if best is not None and not float(np.max(np.abs(z_next - z)[idx] / scales[idx])) \
+            <= best[0]:
+        _, z, run, _, _, figures = best
+    dp, dT, mc, ec = figures
+    return z, run, (message or f"cycle not converged after {num.max_cycles} periods: ") + (
+        f"relative change of p {dp:.2e}, T {dT:.2e}, mass balance {mc:.2e}, "
+        f"energy balance {ec:.2e}")
 
 
 def _budgeted_period(model, Y0, method, rtol, atol, replay, record, num, force_replay,
@@ -389,7 +397,7 @@ def _anderson(model, hist: list, z, z_next, idx, scales):
     gamma = np.linalg.lstsq(dF.T, F[-1], rcond=None)[0]
     cand = z_next.copy()
     cand[idx] = (G[-1] - dG.T @ gamma) * scales[idx]
-    if np.all(np.isfinite(cand)) and _plausible(model, cand):
+    if np.all(np.isfinite(cand)) and plausible(model, cand):
         return cand
     hist.clear()
     return z_next
@@ -409,62 +417,3 @@ def _changes(model: ChamberModel, z: np.ndarray, z_next: np.ndarray) -> tuple[fl
     dp = float(np.nanmax(np.abs(p1 / p0 - 1.0))) if p0.size else 0.0
     dT = float(np.nanmax(np.abs(T1 / T0 - 1.0))) if T0.size else 0.0
     return dp, dT
-
-
-def _plausible(model, z) -> bool:
-    """Masses positive in every living slot, oil non-negative, states inside the fluid's range."""
-    n = model.n
-    ages = model.geo.birth + model.geo.period * np.arange(1, n)
-    live = ages <= model.geo.death
-    m = z[1:n][live]
-    if not np.all(np.isfinite(z)) or np.any(m <= 0):
-        return False
-    # masses only: the liquid's energy counts from its inlet temperature, below which an
-    # evaporating or gas-cooled liquid may fall
-    if model.oil and (np.any(z[2 * n:3 * n] < 0) or np.any(z[4 * n:model.nv * n] < 0)):
-        return False
-    V = model.geo.volume(ages[live])
-    if model.inv_rho_liquid:
-        V = V - z[2 * n + 1:3 * n][live] * model.inv_rho_liquid
-        if np.any(V <= 0):
-            return False
-    return model.fluid.in_range(m / V, z[n + 1:2 * n][live] / m)
-
-
-def _rejected(model, y_end, retreat: bool) -> bool:
-    """Whether a period from a damped Newton iterate ended outside the fluid's table or
-    unphysical (:func:`_check_states`): where ``retreat``, that iterate is rejected as
-    one whose residual grew, and Newton halves its step from the best iterate.  A wet
-    pentane chamber's Newton step, 1/32 of the way from an iterate that stalled, filled
-    its chambers from the plenum past the table's densest liquid (on an AVX2 machine;
-    the same solve converged on the AVX-512 ones, the rounding of their BLAS kernels
-    giving another step); a plain period or a first iterate has nothing to retreat to."""
-    try:
-        _check_states(model, y_end)
-    except IntegrationError:
-        if retreat:
-            return True
-        raise
-    return False
-
-
-def _check_states(model, y):
-    n = model.n
-    m, U = y[:n], y[n:2 * n]
-    if not (np.all(np.isfinite(y)) and np.all(m >= 0)):
-        raise IntegrationError("state not finite or chamber mass negative at the end of a period")
-    live = m > 0
-    if np.any(live):
-        ages = model.geo.birth + model.geo.period * (1 + np.arange(n))
-        # end of period: slot k has age birth + (k+1) period
-        V = model.geo.volume(np.minimum(ages, model.geo.death))
-        if model.inv_rho_liquid:
-            V = V - y[2 * n:3 * n] * model.inv_rho_liquid
-            if np.any(V[live] <= 0):
-                raise IntegrationError("the liquid fills a chamber (hydraulic lock): lower "
-                                       "the volume ratio or raise the gas volume fraction")
-        rho, u = m[live] / V[live], U[live] / m[live]
-        if not model.fluid.in_range(rho, u):
-            why = getattr(model.fluid, "out_of_range", None)
-            raise IntegrationError("chamber state left the range of the fluid's property table"
-                                   + (f": {why(rho, u)}" if why else ""))

@@ -203,7 +203,7 @@ class Operating:
                                                            positive=True),
             oil_time_constant_s=1e-3 * _number(d, "oil_time_constant_ms", s, where, 1.0,
                                                positive=True),
-            suction_quality=_number(d, "suction_quality", s, where, positive=True)
+            suction_quality=_number(d, "suction_quality", s, where)
             if "suction_quality" in d else None,  # checked by fluids.make_fluid
             **liquid,
         )

@@ -321,19 +321,19 @@ def test_an_event_that_leaves_no_finite_state_is_an_error_naming_it(table, monke
 
 def test_a_newton_iterate_whose_period_leaves_the_fluid_is_rejected_not_fatal(table,
                                                                             monkeypatch):
-    # cycle._rejected: a damped Newton iterate whose period ends outside the fluid's
+    # cycle_states.rejected: a damped Newton iterate whose period ends outside the fluid's
     # table (a wet pentane chamber filled past the table's densest liquid) is an iterate
     # whose residual grew: Newton halves its step from the best iterate and goes on to
     # the same fixed point (figures to the 1e-5 of the tests above); a failure in the
     # first period, which has no iterate to retreat to, stays fatal.
-    from rotorflow.quasi1d import cycle
+    from rotorflow.quasi1d import cycle_states
     from rotorflow.quasi1d.integrate import IntegrationError
 
     leak = Leakage(gap_m=5e-6, model="nozzle", coefficient=0.5)
     num = Numerics(rtol=1e-7)
     clean = simulate(table, _op(), leak, numerics=num)
     assert clean.converged and clean.figures["cycles"] >= 3
-    real, checks = cycle._check_states, []
+    real, checks = cycle_states.check_states, []
 
     def failing_at(period):
         def check(model, y):
@@ -343,13 +343,13 @@ def test_a_newton_iterate_whose_period_leaves_the_fluid_is_rejected_not_fatal(ta
             real(model, y)
         return check
 
-    monkeypatch.setattr(cycle, "_check_states", failing_at(2))
+    monkeypatch.setattr(cycle_states, "check_states", failing_at(2))
     hit = simulate(table, _op(), leak, numerics=num)
     assert hit.converged and hit.figures["cycles"] > clean.figures["cycles"]
     for key in ("mass_flow_kg_s", "indicated_power_W", "discharge_temperature_K"):
         assert hit.figures[key] == pytest.approx(clean.figures[key], rel=1e-5)
     checks.clear()
-    monkeypatch.setattr(cycle, "_check_states", failing_at(1))
+    monkeypatch.setattr(cycle_states, "check_states", failing_at(1))
     with pytest.raises(IntegrationError, match="left the range"):
         simulate(table, _op(), leak, numerics=num)
 

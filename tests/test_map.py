@@ -12,6 +12,8 @@ import pytest
 from rotorflow.workflow.cli import main
 from rotorflow.workflow.sweep_points import dumps_toml
 
+from .conftest import run_cli
+
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT = ROOT / "examples" / "default.toml"
 
@@ -169,9 +171,7 @@ def test_coolprop_map_whose_suction_range_enters_the_dome_is_refused(tmp_path):
     raw["map"] = {"speed_rpm": [2000, 4000], "p_suction_bar": [3.0, 6.0], "points": [2, 3]}
     case = tmp_path / "hp.toml"
     case.write_text(dumps_toml(raw))
-    out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", "map", str(case),
-                          "--serial", "--build", str(tmp_path / "build")],
-                         capture_output=True, text=True, cwd=tmp_path)
+    out = run_cli("map", case, "--serial", "--build", tmp_path / "build")
     assert out.returncode == 2, out.stderr
     assert len(out.stderr.strip().splitlines()) == 1, out.stderr
     assert "6 bar" in out.stderr and "subcooled liquid" in out.stderr, out.stderr

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import importlib
 import json
-import subprocess
-import sys
 import tomllib
 
 import CoolProp.CoolProp as CP
@@ -22,7 +20,7 @@ import pytest
 from rotorflow.quasi1d import Leakage, Numerics, Operating, flows, simulate
 from rotorflow.quasi1d.coolprop_fluid import tabulated
 
-from .conftest import CASES
+from .conftest import CASES, run_cli
 
 R134A_CASE = CASES / "refrigeration_r134a.toml"
 SIM = importlib.import_module("rotorflow.quasi1d.simulate")  # the module, not the function
@@ -45,8 +43,7 @@ def _op(raw, **kw):
 
 
 def _cli(*args):
-    return subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", *map(str, args)],
-                          capture_output=True, text=True)
+    return run_cli(*args)
 
 
 # --- (a) the refused case runs ---------------------------------------------------------------

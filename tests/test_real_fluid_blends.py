@@ -12,8 +12,6 @@ sound speed.
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import CoolProp.CoolProp as CP
 import numpy as np
@@ -21,7 +19,7 @@ import pytest
 
 from rotorflow.quasi1d.coolprop_fluid import tabulated
 
-from .conftest import CASES
+from .conftest import CASES, run_cli
 
 R134A_CASE = CASES / "refrigeration_r134a.toml"
 DEW_4BAR = CP.PropsSI("T", "P", 4e5, "Q", 1.0, "R404A")  # 261.03 K
@@ -68,8 +66,7 @@ def test_r404a_near_its_dew_line_runs(tmp_path, superheat, extra):
         text = text.replace("p_discharge_bar = 9.0", "p_discharge_bar = 12.0")
     case = tmp_path / "case.toml"
     case.write_text(text)
-    out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", "simulate", case,
-                          "--json"], capture_output=True, text=True)
+    out = run_cli("simulate", case, "--json")
     assert out.returncode == 0, out.stderr
     fig = json.loads(out.stdout)
     pd = 16e5 if extra else 12e5

@@ -6,8 +6,6 @@ problem, nothing written.  The cases are examples/refrigeration_r134a.toml (R134
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 
 import CoolProp.CoolProp as CP
 import pytest
@@ -15,15 +13,14 @@ import pytest
 from rotorflow.errors import CaseError
 from rotorflow.quasi1d.coolprop_fluid import SATURATION_T_TOLERANCE_K, tabulated
 
-from .conftest import CASES
+from .conftest import CASES, run_cli
 
 R134A_CASE = CASES / "refrigeration_r134a.toml"
 TSAT_3BAR = CP.PropsSI("T", "P", 3e5, "Q", 1.0, "R134a")  # 273.82 K
 
 
 def _cli(*args):
-    return subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", *map(str, args)],
-                          capture_output=True, text=True)
+    return run_cli(*args)
 
 
 def _refused(tmp_path, text):

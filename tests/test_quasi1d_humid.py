@@ -8,8 +8,6 @@ from __future__ import annotations
 import copy
 import functools
 import math
-import subprocess
-import sys
 
 import pytest
 
@@ -20,6 +18,8 @@ from rotorflow.quasi1d import Operating
 from rotorflow.quasi1d.settings import AIR_MOLAR_MASS_G_MOL
 from rotorflow.quasi1d.simulate import case_settings, simulate
 from rotorflow.workflow.case import case_from_raw, load_toml
+
+from .conftest import run_cli
 
 EXAMPLE = pm.EXAMPLE
 WATER_INJECTED = EXAMPLE.parent / "twin_screw_water_injected.toml"
@@ -146,8 +146,7 @@ def test_bad_volatile_keys_are_named(keys, word):
 def test_a_bad_volatile_liquid_exits_2_with_one_line(tmp_path, extra, word):
     case = tmp_path / "case.toml"
     case.write_text(EXAMPLE.read_text().replace('fluid = "air"\n', 'fluid = "air"\n' + extra))
-    out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", "simulate",
-                          str(case), "--json"], capture_output=True, text=True)
+    out = run_cli("simulate", case, "--json")
     assert out.returncode == 2 and out.stdout == ""
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and word in lines[0], out.stderr

@@ -8,8 +8,6 @@ import copy
 import functools
 import math
 import re
-import subprocess
-import sys
 from types import SimpleNamespace
 
 import numpy as np
@@ -22,6 +20,8 @@ from rotorflow.postprocess import pump_multiphase as pm
 from rotorflow.quasi1d import Operating, flows, liquid
 from rotorflow.quasi1d.settings import AIR_MOLAR_MASS_G_MOL
 from rotorflow.workflow.case import case_from_raw, load_toml
+
+from .conftest import run_cli
 
 # --- the omega method --------------------------------------------------------------------
 
@@ -253,8 +253,7 @@ def test_bad_liquid_fraction_exits_2_with_one_line(tmp_path):
     case = tmp_path / "case.toml"
     case.write_text(re.sub(r"(?m)^gas_volume_fraction = [0-9.]+", "gas_volume_fraction = 1.5",
                            pm.EXAMPLE.read_text()))
-    out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", "simulate",
-                          str(case), "--json"], capture_output=True, text=True)
+    out = run_cli("simulate", case, "--json")
     assert out.returncode == 2 and out.stdout == ""
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "gas_volume_fraction" in lines[0], out.stderr

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -26,7 +24,7 @@ from rotorflow.quasi1d.perfect_gas import PerfectGas
 from rotorflow.quasi1d.simulate import build_model
 from rotorflow.quasi1d.synthetic import sin2_table
 
-from .conftest import CASES
+from .conftest import CASES, run_cli
 
 GAS = PerfectGas(molar_mass_kg_kmol=28.97, cp_J_kgK=1006.43)  # seed 001's perfect-gas air
 OIL_RATIO = 3.0
@@ -227,8 +225,7 @@ def test_a_bad_mixture_is_an_error_naming_the_key(table, value, tmp_path):
     case = tmp_path / "case.toml"
     case.write_text((CASES / "crc60.toml").read_text().replace(
         "[leakage]", f"[leakage]\nmixture = {value}"))
-    out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", "simulate", str(case),
-                          "--json"], capture_output=True, text=True)
+    out = run_cli("simulate", case, "--json")
     assert out.returncode == 2 and out.stdout == ""
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "'mixture'" in lines[0] and "[leakage]" in lines[0], out.stderr

@@ -3,13 +3,11 @@ cycle did not converge (as `rotorflow map` counts such a point failed), and a wa
 when the machine delivers nothing (a converged result, but not a compressor's)."""
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
-from .conftest import CASES
+from .conftest import CASES, run_cli
 
 DEFAULT = (CASES / "default.toml").read_text()
 
@@ -17,8 +15,7 @@ DEFAULT = (CASES / "default.toml").read_text()
 def _simulate(tmp_path, text):
     case = tmp_path / "case.toml"
     case.write_text(text)
-    out = subprocess.run([sys.executable, "-m", "rotorflow.workflow.cli", "simulate", case,
-                          "--json"], capture_output=True, text=True)
+    out = run_cli("simulate", case, "--json")
     return out, json.loads(out.stdout) if out.stdout else None
 
 

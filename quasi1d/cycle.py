@@ -165,14 +165,17 @@ def _update_best(model, run, z, z_next, idx, dz, norm, best, lam, figures, J=Non
 
 
 def _damped(model, best, idx, lam):
-    """The damped Newton iterate from the best state, shrunk until it is physical; the
-    best iterate's successor when none is."""
+    """(the damped Newton iterate from the best state, shrunk until it is physical; the
+    damping it took).  The best iterate's successor where none is, with the smallest
+    damping tried: the next failure halves from the damping that was run, not from
+    one whose steps were never physical (a wet n-pentane pump's halvings from 0.5 to
+    0.125 each ran the same successor, three batch periods to one result)."""
     for shrink in (1.0, 0.5, 0.25):
         cand = best[1].copy()
         cand[idx] += lam * shrink * best[3]
         if plausible(model, cand):
-            return cand
-    return best[4]
+            return cand, lam * shrink
+    return best[4], lam * 0.25
 
 
 def solve(model: ChamberModel, num: Numerics, record: bool = True) -> CycleSolution:
@@ -350,8 +353,9 @@ def _newton_next(model, nw: _NewtonState, run, z, z_next, idx, dz, scales, figur
         return "anderson", nw.best[4]
     if nw.best[3] is None or nw.lam < 1.0 / 16.0:
         return "stalled", None
-    z_new = _damped(model, nw.best, idx, nw.lam)
-    if nw.lam < lam and not nw.probed and PROBE_GAIN > 0.0:  # the first that failed
+    failed = nw.lam < lam
+    z_new, nw.lam = _damped(model, nw.best, idx, nw.lam)
+    if failed and not nw.probed and PROBE_GAIN > 0.0:  # the first that failed
         nw.plain, nw.probed, nw.resume = nw.best[0], True, z_new
         return "step", nw.best[4]
     return "step", z_new

@@ -388,3 +388,21 @@ def test_chord_periods_go_on_while_they_reach_the_gain_sooner_than_a_batch():
     assert cycle._chord_pays(0.5, [2.4, 0.7])
     assert not cycle._chord_pays(1.0, [1e9, 1e-9])
     assert not cycle._chord_pays(float("nan"), [1e9, 1e-9])
+
+
+def test_the_damping_newton_keeps_is_the_step_it_took(monkeypatch):
+    # cycle._damped shrinks a Newton step until the iterate is physical; the damping it
+    # returns is the one taken, so that a failure halves from the step that ran (from the
+    # one asked, three halvings of a wet n-pentane pump ran the same fallback iterate).
+    from rotorflow.quasi1d import cycle
+
+    monkeypatch.setattr(cycle, "plausible", lambda model, z: z[1] < 0.3)
+    z, step, successor = np.zeros(2), np.array([1.0]), np.array([0.0, 0.1])
+    best = (1.0, z, None, step, successor, None)
+    idx = np.array([1])
+    for lam in (1.0, 0.5, 0.25):
+        cand, taken = cycle._damped(None, best, idx, lam)
+        assert cand[1] < 0.3 and cand[1] == pytest.approx(taken * step[0])
+        assert taken <= lam
+    cand, taken = cycle._damped(None, best, idx, 4.0)  # nothing physical: the successor
+    assert cand is successor and taken == 1.0

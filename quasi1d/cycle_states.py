@@ -33,10 +33,11 @@ def rejected(model, y_end, retreat: bool) -> bool:
     """Whether a period from a damped Newton iterate ended outside the fluid's table or
     unphysical (:func:`check_states`): where ``retreat``, that iterate is rejected as
     one whose residual grew, and Newton halves its step from the best iterate.  A wet
-    pentane chamber's Newton step, 1/32 of the way from an iterate that stalled, filled
+    n-pentane pump's full Newton step, after a stall had tightened the tolerance, filled
     its chambers from the plenum past the table's densest liquid (on an AVX2 machine;
     the same solve converged on the AVX-512 ones, the rounding of their BLAS kernels
-    giving another step); a plain period or a first iterate has nothing to retreat to."""
+    giving another step).  Before Newton has a best iterate, under the plain iteration
+    (``newton = false``) and under Anderson's, there is nothing to retreat to."""
     try:
         check_states(model, y_end)
     except IntegrationError:

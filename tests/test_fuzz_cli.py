@@ -12,8 +12,6 @@ a few minutes; the full pipeline (``run``) only on the quicker share.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import math
 import random
@@ -25,10 +23,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rotorflow.workflow.cli import main
 from rotorflow.workflow.sweep_points import dumps_toml
 
-from .conftest import CASES
+from .conftest import CASES, run_cli
 
 #: Wall-clock budget of one command [s]: a full `run` of the default case (render,
 #: solids, report) takes about 10 s here, and the cycle solver stops at the
@@ -113,16 +110,14 @@ def _alarm(signum, frame):
 
 
 def invoke(argv: list[str]) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
     old = signal.signal(signal.SIGALRM, _alarm)
     signal.alarm(BUDGET_S)
     try:
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            code = main(argv)
+        out = run_cli(*argv)
     finally:
         signal.alarm(0)
         signal.signal(signal.SIGALRM, old)
-    return code, out.getvalue(), err.getvalue()
+    return out.returncode, out.stdout, out.stderr
 
 
 def _finite(x) -> bool:

@@ -104,17 +104,20 @@ class MachineRun:
 
 
 def case_key(m: FrozenMachine, controls: Controls) -> str:
-    """A digest of everything that determines the run's result."""
-    ports = hashlib.sha256()
-    for region in m.ports:
-        for ring in region:
-            ports.update(np.ascontiguousarray(np.round(np.asarray(ring, float), 12)).tobytes())
+    """A digest of everything that determines the run's result.
+
+    The ports enter as the ages they were cut at (to 1e-9 rad), not as their polygons:
+    the polygons' vertices follow the CPU's SIMD paths through Clipper's integer grid
+    (0.37 um apart between numpy's AVX-512 and AVX2 sine and cosine, 2026-12-01), so a
+    digest of them matched the recorded study on one machine only.  A change to how the
+    ports are cut must bump CASE_FORMAT, as any change to the grid does.  A machine
+    built without its timing is keyed by its polygons."""
     sweep = m.sweep
     return foam_case.digest({
         "format": CASE_FORMAT, "pair": m.pair.digest(),
         "sweep": [sweep.kind, sweep.length, sweep.wrap, sweep.scale_end, sweep.lead_ratio],
         "phi": m.phi, "gap": m.gap, "layers": m.layers, "spec": m.spec.key(),
-        "end_layer": m.end_layer, "ports": ports.hexdigest(),
+        "end_layer": m.end_layer, "ports": _ports_key(m),
         "plenums": [m.p_suction, m.p_discharge, m.T_suction, m.T_discharge],
         "omega": m.omega_outer, "gas": asdict(m.gas), "moving_walls": m.moving_walls,
         # The starting pressures to the mPa: they come from the quasi-1D model's frozen
@@ -126,6 +129,16 @@ def case_key(m: FrozenMachine, controls: Controls) -> str:
                             for k, v in (m.initial_p or {}).items()),
         "controls": asdict(replace(controls, timeout_s=None)),
     })
+
+
+def _ports_key(m: FrozenMachine) -> list[float] | str:
+    if m.port_timing:
+        return [round(float(t), 9) for t in m.port_timing]
+    ports = hashlib.sha256()
+    for region in m.ports:
+        for ring in region:
+            ports.update(np.ascontiguousarray(np.round(np.asarray(ring, float), 12)).tobytes())
+    return ports.hexdigest()
 
 
 class _Monitor:

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass, replace
+from dataclasses import astuple, dataclass, replace
 from pathlib import Path
 
 from rotorflow.errors import CaseError
@@ -133,13 +133,14 @@ def frozen_machine(case, table, phi: float, gap: float, grid: Grid, iterations: 
     state = solve_frozen(model, phi - origin)
     period = float(case.pair.period)
     initial = dict(zip(slot_of(state, phi, period, origin), map(float, state.p), strict=True))
-    suction, discharge = ports(machine, case_port_timing(case, machine))
+    timing = case_port_timing(case, machine)
+    suction, discharge = ports(machine, timing)
     return FrozenMachine(
         case.pair, machine.sweep, phi, gap, grid.layers, grid.spec(spec),
         (suction.to_polygons(), discharge.to_polygons()),
         float(model.suc.p), float(model.dis.p), float(model.suc.T), float(model.dis.T),
         float(model.geo.omega_outer), iterations=iterations, initial_p=initial,
-        end_layer=grid.end_layer_m)
+        end_layer=grid.end_layer_m, port_timing=tuple(map(float, astuple(timing))))
 
 
 def angle_name(phi: float) -> str:

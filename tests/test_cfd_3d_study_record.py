@@ -15,13 +15,15 @@ would break that (the check can fail).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from rotorflow.cases import machine_study
 from rotorflow.cases.chamber_case import _resolve
-from rotorflow.cases.machine_run import recorded_run
-from rotorflow.cases.machine_setup import case_table
+from rotorflow.cases.machine_run import Controls, case_key, recorded_run
+from rotorflow.cases.machine_setup import Grid, case_table, frozen_machine
 from rotorflow.postprocess import machine_compare
 from rotorflow.postprocess.richardson import richardson, two_grid
 from rotorflow.workflow.case import load_case
@@ -86,3 +88,17 @@ def test_the_stage_tabulates_the_quick_estimate_and_the_models(records, tmp_path
     assert result["two_grid"]["leakage"]["max_abs"] < TARGET
     assert set(result["models"]) == {"nozzle", "fanno", "cfd-calibrated"}
     assert (tmp_path / "machine_errors.md").read_text().count("\n") > 4
+
+
+def test_a_runs_key_follows_its_port_timing_not_its_polygons_last_bits():
+    """The recorded keys must hold on any CPU: the ports' polygons moved by 0.37 um
+    between numpy's AVX-512 and AVX2 sine and cosine (Clipper's integer grid), and a key
+    that hashed them matched the recorded study on one kind of machine only.  A port cut
+    elsewhere is another run, so the timing still keys it."""
+    case = load_case(CASE_FILE)
+    fm = frozen_machine(case, case_table(case), 0.0, 20e-6, Grid(768, 4, 16))
+    controls = Controls()
+    moved = tuple([np.asarray(ring) + 5e-7 for ring in region] for region in fm.ports)
+    assert case_key(replace(fm, ports=moved), controls) == case_key(fm, controls)
+    later = (fm.port_timing[0], fm.port_timing[1] + 1e-6, *fm.port_timing[2:])
+    assert case_key(replace(fm, port_timing=later), controls) != case_key(fm, controls)

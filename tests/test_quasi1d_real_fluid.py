@@ -584,7 +584,7 @@ def test_a_plain_period_that_does_not_gain_leaves_newtons_iteration_as_it_was(mo
         return integrate(model, y0, *args, **kw)
 
     monkeypatch.setattr(cycle, "integrate_period", counting)
-    monkeypatch.setenv("ROTORFLOW_COMPILED", "0")  # (one kernel for both: to the last bit)
+    monkeypatch.setenv("ROTORFLOW_COMPILED", "1")  # (one kernel for both: to the last bit)
     table, op = sin2_table(rows=721), _pentane_op(0.05)
     leak = Leakage(gap_m=20e-6, model="nozzle")
     probed = simulate(table, op, leak, numerics=Numerics(max_seconds=60))

@@ -94,10 +94,11 @@ class FrozenMachine:
     initial_p: dict | None = None  # slot -> Pa (the frozen quasi-1D state)
     end_layer: float | None = None  # thin end layers, m (:func:`.polymesh.graded_heights`)
     moving_walls: bool = True  # the rotors' surfaces slide at their speeds (else at rest)
-    #: The ages (rad) the ports were cut at (:class:`..geometry.ports.PortTiming`): with
-    #: the pair and sweep they determine the ports, and they key the run (its polygons'
-    #: last vertices follow the CPU's SIMD paths, :func:`.machine_run.case_key`).
-    port_timing: tuple = ()
+    #: How the ports were cut: the machine's points per period and the ages (rad) of its
+    #: :class:`..geometry.ports.PortTiming`.  With the pair and sweep they determine the
+    #: ports, and they key the run (its polygons' last vertices follow the CPU's SIMD
+    #: paths, :func:`.machine_run.case_key`).
+    port_cut: tuple = ()
 
     def rotor_speeds(self) -> list[tuple[str, tuple[float, float], float]]:
         """(patch, axis point, omega) per rotor: the outer rotor about O1, the inner

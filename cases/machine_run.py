@@ -106,12 +106,13 @@ class MachineRun:
 def case_key(m: FrozenMachine, controls: Controls) -> str:
     """A digest of everything that determines the run's result.
 
-    The ports enter as the ages they were cut at (to 1e-9 rad), not as their polygons:
+    The ports enter as how they were cut (the machine's points per period and the port
+    timing's ages, to 1e-9 rad), not as their polygons:
     the polygons' vertices follow the CPU's SIMD paths through Clipper's integer grid
     (0.37 um apart between numpy's AVX-512 and AVX2 sine and cosine, 2026-12-01), so a
     digest of them matched the recorded study on one machine only.  A change to how the
     ports are cut must bump CASE_FORMAT, as any change to the grid does.  A machine
-    built without its timing is keyed by its polygons."""
+    built without them is keyed by its polygons."""
     sweep = m.sweep
     return foam_case.digest({
         "format": CASE_FORMAT, "pair": m.pair.digest(),
@@ -132,8 +133,8 @@ def case_key(m: FrozenMachine, controls: Controls) -> str:
 
 
 def _ports_key(m: FrozenMachine) -> list[float] | str:
-    if m.port_timing:
-        return [round(float(t), 9) for t in m.port_timing]
+    if m.port_cut:
+        return [int(m.port_cut[0]), *(round(float(t), 9) for t in m.port_cut[1:])]
     ports = hashlib.sha256()
     for region in m.ports:
         for ring in region:

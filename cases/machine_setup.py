@@ -140,7 +140,8 @@ def frozen_machine(case, table, phi: float, gap: float, grid: Grid, iterations: 
         (suction.to_polygons(), discharge.to_polygons()),
         float(model.suc.p), float(model.dis.p), float(model.suc.T), float(model.dis.T),
         float(model.geo.omega_outer), iterations=iterations, initial_p=initial,
-        end_layer=grid.end_layer_m, port_timing=tuple(map(float, astuple(timing))))
+        end_layer=grid.end_layer_m,
+        port_cut=(machine.points_per_period, *map(float, astuple(timing))))
 
 
 def angle_name(phi: float) -> str:

@@ -107,10 +107,10 @@ def case_key(m: FrozenMachine, controls: Controls) -> str:
     """A digest of everything that determines the run's result.
 
     The ports enter as how they were cut (the machine's points per period and the port
-    timing's ages, to 1e-9 rad), not as their polygons:
-    the polygons' vertices follow the CPU's SIMD paths through Clipper's integer grid
-    (0.37 um apart between numpy's AVX-512 and AVX2 sine and cosine, 2026-12-01), so a
-    digest of them matched the recorded study on one machine only.  A change to how the
+    timing's ages, to 1e-9 rad), not as their polygons: the polygons' vertices follow
+    the CPU's SIMD paths through Clipper's integer grid (0.37 um apart between numpy's
+    AVX-512 and AVX2 sine and cosine, 2026-12-01), so a digest of them matched the
+    recorded study on one machine only.  A change to how the
     ports are cut must bump CASE_FORMAT, as any change to the grid does.  A machine
     built without them is keyed by its polygons."""
     sweep = m.sweep

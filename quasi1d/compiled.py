@@ -95,14 +95,28 @@ def _entries():
 
 
 def _helpers():
-    from . import chamber, coolprop_bubble, coolprop_fluid, dry_air, flows, kernel, oil, stepping
+    from . import (
+        chamber,
+        coolprop_bubble,
+        coolprop_fluid,
+        dry_air,
+        flows,
+        kernel,
+        liquid,
+        oil,
+        rarefied,
+        stepping,
+    )
 
-    return (oil.homogeneous_split, oil.heat_to_gas, flows._x_eff, flows.nozzle_critical_ratio,
+    return (oil.homogeneous_split, oil.heat_to_gas, liquid.critical_ratio, liquid.omega_flux,
+            liquid.mixture_factor, rarefied._rarefaction, rarefied.flow_flux,
+            flows._x_eff, flows.nozzle_critical_ratio,
             flows._psi, flows.nozzle_constants,
             flows.nozzle_f_c, flows.fanno_f, dry_air.table_interp, dry_air._lerp,
             coolprop_fluid.table_cell, coolprop_fluid.table_row, coolprop_fluid.table_state,
             coolprop_fluid._or_liquid, coolprop_bubble.liquid_state, kernel.fluid_state,
-            kernel.ideal_flow, kernel._add, kernel._node, kernel._slots, kernel._oil_leak,
+            kernel.ideal_flow, kernel._add, kernel._node, kernel._slots, kernel._flux_at,
+            kernel._port_gas, kernel._oil_leak,
             kernel._oil_heat, kernel._oil_exit, chamber.spline_at,
             stepping.err_norm, stepping.rk_step, stepping._grow, stepping.segment,
             stepping.ros23_step, stepping.jacobian, stepping._w_solve, kernel.rhs_segment,
@@ -112,7 +126,8 @@ def _helpers():
 def _inlined():
     from . import coolprop_bubble, coolprop_fluid, dry_air, kernel, oil
 
-    return (kernel._add, kernel._node, kernel._slots, kernel._oil_leak, oil.homogeneous_split,
+    return (kernel._add, kernel._node, kernel._slots, kernel._flux_at, kernel._port_gas,
+            kernel._oil_leak, oil.homogeneous_split,
             oil.heat_to_gas, kernel.fluid_state,
             dry_air.table_interp, dry_air._lerp, coolprop_fluid.table_row,
             coolprop_fluid.table_state,

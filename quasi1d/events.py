@@ -112,7 +112,7 @@ def initial_state(model) -> np.ndarray:
     # p ~ rho^kappa would guess liquid-dense states the fluid has not got.  A guess only
     # has to be a state; 1 (isothermal) is one for a gas or a wet mixture.
     kap = max(model.suc.kappa, 1.0)
-    _refuse_wet_lock(model)
+    _refuse_lock(model)
     beta = op.gas_volume_fraction if model.inv_rho_liquid else 1.0
     m_trap = beta * model.suc.rho * geo.v_trapped  # the gas trapped
     ml_trap = trapped_liquid(model)
@@ -166,24 +166,38 @@ def trapped_liquid(model) -> float:
     return model.liquid_ratio * beta * model.suc.rho * model.geo.v_trapped
 
 
-def _refuse_wet_lock(model) -> None:
-    """A wet suction whose liquid alone needs more room than the chamber has left when
-    its discharge opens locks it: refused.  (The liquid, compressed, hardly shrinks and
-    evaporates only as the vapour heats it; the model ran such points to pressures of
-    hundreds of bar read off the property table's liquid side beyond its range, and
-    called them converged.)"""
+#: Gas room left at the discharge's opening (of the room the chamber has then) below
+#: which a liquid's share counts as filling it: the share 1 - beta and the room
+#: V_do / V_trapped are equal at beta = 1 - 1 / vi, up to the port angle's round-off.
+LOCK_ROOM = 1e-9
+
+
+def _refuse_lock(model) -> None:
+    """A liquid drawn in that alone needs as much room as the chamber has left when its
+    discharge opens locks it: refused.  A wet suction's liquid, compressed, hardly
+    shrinks and evaporates only as the vapour heats it (the model ran such points to
+    pressures of hundreds of bar read off the property table's liquid side beyond its
+    range, and called them converged); an incompressible one (gas_volume_fraction <
+    1, its share 1 - beta of the trapped volume) squeezes the gas to nothing (a
+    multiphase pump at beta 0.5 and volume ratio 2 ran until its step size underflowed
+    or its time budget ran out, exit 1, instead of naming the input)."""
     q = model.op.suction_quality
-    if q is None or q >= 1.0:
-        return
     geo, suc = model.geo, model.suc
-    rho_liquid = model.fluid.state_pT(suc.p, suc.T, q=0.0)[0]
-    share = (1.0 - q) * suc.rho / rho_liquid
+    if model.inv_rho_liquid:
+        beta = model.op.gas_volume_fraction
+        share, what = 1.0 - beta, f"gas_volume_fraction {beta:g}"
+        fix = "raise gas_volume_fraction"
+    elif q is not None and q < 1.0:
+        rho_liquid = model.fluid.state_pT(suc.p, suc.T, q=0.0)[0]
+        share = (1.0 - q) * suc.rho / rho_liquid
+        what, fix = f"suction_quality {q:g}", "raise suction_quality"
+    else:
+        return
     room = float(geo.volume(geo.discharge_open)) / geo.v_trapped
-    if share >= room:
-        raise CaseError(f"hydraulic lock: the wet suction's liquid (suction_quality {q:g}) "
-                        f"fills {share:.1%} of the trapped volume, more than the {room:.1%} "
-                        f"left when the discharge opens; raise suction_quality or lower "
-                        f"volume_ratio")
+    if share >= room * (1.0 - LOCK_ROOM):
+        raise CaseError(f"hydraulic lock: the liquid drawn in ({what}) fills {share:.1%} of "
+                        f"the trapped volume, no less than the {room:.1%} left when the "
+                        f"discharge opens; {fix} or lower volume_ratio")
 
 
 def shift(model, y_end: np.ndarray) -> np.ndarray:

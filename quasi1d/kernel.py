@@ -28,7 +28,9 @@ from . import flows, stepping
 from .chamber import spline_at
 from .coolprop_fluid import table_state
 from .dry_air import table_interp as table_1d
+from .liquid import mixture_factor
 from .oil import heat_to_gas, homogeneous_split
+from .rarefied import flow_flux
 
 # Fluid kinds of fluid_state (the fluids' kernel_params)
 PERFECT, TABLE_1D, TABLE_2D = 0, 1, 2
@@ -133,13 +135,31 @@ def ideal_flow(A, Bh, rc, uc, pc, hc, prc, puc, Vc, Vtc, p_pl, h_pl, omega, rela
 
 
 def fusable(model, seg) -> bool:
-    """The segment needs nothing but what :func:`rhs_fused` evaluates: nozzle or Fanno
-    leakage on static walls, gas or gas with injected oil (:mod:`.oil`; no liquid
-    volume, no vapour), a fluid with kernel parameters."""
-    return (not model.vapour and not model.inv_rho_liquid and not seg.walls
-            and not seg.cou_gap.size
-            and all(g.model in ("nozzle", "fanno") for g in seg.groups)
+    """The segment needs nothing but what :func:`rhs_fused` evaluates: nozzle, Fanno or
+    rarefied leakage on static walls, gas, gas with injected oil (:mod:`.oil`) or with a
+    liquid that fills volume and leaks with it as a homogeneous mixture (:mod:`.liquid`;
+    no vapour), a fluid with kernel parameters."""
+    return (not model.vapour and not seg.walls and not seg.cou_gap.size
+            and not (model.inv_rho_liquid and model.leak.mixture == "centrifuged")
+            and all(g.model in ("nozzle", "fanno", "rarefied") for g in seg.groups)
             and hasattr(model.fluid, "kernel_params"))
+
+
+def flow_laws(seg):
+    """The segment's flow laws as :func:`rhs_fused` takes them: Fanno's flags, zeta and
+    choking ratio, and the rarefied law's rows (a flag, then
+    :meth:`.rarefied.RarefiedLaw.per_flow`'s) per flow."""
+    nf = seg.ia.size
+    fanno, zeta, x_choke = np.zeros(nf, bool), np.zeros(nf), np.zeros(nf)
+    rar = np.zeros((7, nf))
+    for grp in seg.groups:
+        if grp.model == "fanno":
+            fanno[grp.flows], zeta[grp.flows] = True, grp.zeta
+            x_choke[grp.flows] = grp.x_choke
+        elif grp.model == "rarefied":
+            rar[0, grp.flows] = 1.0
+            rar[1:, grp.flows] = grp.rarefied.per_flow(rar[0, grp.flows].size)
+    return fanno, zeta, x_choke, rar
 
 
 def scatter(m):
@@ -161,27 +181,31 @@ def _add(dy, b, sparse, i, v):
 # Rows of rhs_fused's node values (suction plenum, the slots, the discharge plenum):
 # the state, the nozzle constants of its kappa (critical ratio, 2k / (k - 1), 1 / k) and
 # sqrt(p rho), the slots' T and pressure derivatives; with oil (.oil) its mass and
-# enthalpy per gas mass, its heat to the gas and the gas leaving through a discharge port.
-_P, _R, _H, _U, _XC, _CC, _IK, _S, _T, _PR, _PU, _X, _Y, _QO, _OUT = range(15)
+# enthalpy per gas mass, its heat to the gas and the gas leaving through a discharge port;
+# kappa itself (a liquid's mixture factor, .liquid).
+_P, _R, _H, _U, _XC, _CC, _IK, _S, _T, _PR, _PU, _X, _Y, _QO, _OUT, _K = range(16)
 
 
 def _node(W, j, p, rho, h, kap):
-    W[_P, j], W[_R, j], W[_H, j], W[_S, j] = p, rho, h, np.sqrt(p * rho)
+    W[_P, j], W[_R, j], W[_H, j], W[_S, j], W[_K, j] = p, rho, h, np.sqrt(p * rho), kap
     xc, cc, ik = flows.nozzle_constants(kap)
     W[_XC, j], W[_CC, j], W[_IK, j] = xc, cc, ik
 
 
 def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, ib,
-              fanno, zeta, x_choke, maps, acc_w, acc_q, c, p_pl, h_pl, ideal_maps, plen,
+              fanno, zeta, x_choke, rar, maps, acc_w, acc_q, c, p_pl, h_pl, ideal_maps, plen,
               kind, par, tab, gamma, oil):
     """dy/dtheta of a fusable segment (see :meth:`.model.ChamberModel.rhs`): y (B, S);
     the geometry of the active slots at the angle (V, 1/V, dV/dtheta, dV/dt, the flows'
     areas, heat transfer coefficient times area or an empty array); the flows' nodes and
-    laws (Fanno where ``fanno``); the flows' and the ideal ports' maps into dy
+    laws (Fanno where ``fanno``, rarefied where ``rar[0]`` > 0: its rows those of
+    :meth:`.rarefied.RarefiedLaw.per_flow` shifted by one); the flows' and the ideal
+    ports' maps into dy
     (:func:`scatter` of mm, me, mg and of mx, mxe); the ideal ports (slots c); the
     plenums' p, rho, h, kappa (plen (4, 2)); the fluid (kind, par, tab; gamma > 0 a
-    perfect gas); the injected oil (:func:`.oil.fused_args`: its leakage with the gas,
-    its heat to the gas, its exit through the discharge port).
+    perfect gas); the injected oil or a liquid (:func:`.oil.fused_args`: its leakage
+    with the gas, its heat to the gas, its exit through the discharge port, and a
+    liquid's 1 / rho_l, which takes its volume from the gas's, :mod:`.liquid`).
 
     Loops over the batch, the slots and the flows, calling the physics one element at a
     time (:func:`fluid_state`, :func:`.flows.nozzle_f_c`, :func:`.flows.fanno_f`,
@@ -190,18 +214,18 @@ def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, 
     only (sqrt(p rho), the nozzle's constants) is evaluated per node, not per flow."""
     B = y.shape[0]
     dy = np.zeros(y.shape)
-    W = np.empty((15, na + 2))  # node values of one batch member
+    W = np.empty((16, na + 2))  # node values of one batch member
     _node(W, 0, plen[0, 0], plen[1, 0], plen[2, 0], plen[3, 0])
     _node(W, na + 1, plen[0, 1], plen[1, 1], plen[2, 1], plen[3, 1])
     x_id = np.empty(c.size)
     h_id = np.empty(c.size)
-    on, split, nl, flags = oil[0], oil[1], oil[2], oil[8]
+    on, split, nl, flags, inv = oil[0], oil[1], oil[2], oil[8], oil[11]
     nf = ia.size
     if on:
         W[_X, 0] = W[_Y, 0] = 0.0  # (the suction plenum's gas is dry)
         W[_X, na + 1], W[_Y, na + 1] = oil[6], oil[7]
     for b in range(B):
-        _slots(W, y, b, n, na, iV, kind, par, tab, gamma, on)
+        _slots(W, y, b, n, na, V, iV, kind, par, tab, gamma, on, inv)
         for f in range(ia.size):
             if not area[f] > 0.0:  # a line that does not exist at this angle
                 continue
@@ -209,14 +233,11 @@ def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, 
             fwd = W[_P, a] >= W[_P, d]
             up, dn = (a, d) if fwd else (d, a)
             x = W[_P, dn] / W[_P, up]
-            if fanno[f]:
-                fx = flows.fanno_f(x, zeta[f], x_choke[f])
-            else:
-                fx = flows.nozzle_f_c(x, W[_XC, up], W[_CC, up], W[_IK, up])
-            F = W[_S, up] * fx * area[f]
+            F = W[_S, up] * _flux_at(W, f, up, x, fanno, zeta, x_choke, rar) * area[f]
             F = F if fwd else -F
             if split and f < nl:  # a homogeneous gas-oil mixture leaks (.oil)
-                F = _oil_leak(dy, b, maps, nf + f, F, W, ia[f] if F >= 0.0 else ib[f])
+                F = _oil_leak(dy, b, maps, nf + f, F, W, ia[f] if F >= 0.0 else ib[f], x,
+                              inv)
             elif on and flags[f]:  # (the oil leaves with the gas, _oil_exit)
                 W[_OUT, a] += max(F, 0.0)
             _add(dy, b, maps[0], f, F)
@@ -239,10 +260,11 @@ def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, 
             _oil_heat(dy, b, y, n, na, W, oil, w)
         for i in range(c.size):
             k = c[i]
+            Vg, Vtg, kl = _port_gas(V, Vt, y, dy, b, n, k, inv, w)
             x_id[i], h_id[i] = ideal_flow(
                 dy[b, k] * omega, (dy[b, n + k] + W[_P, k + 1] * dV[k]) * omega,
                 W[_R, k + 1], W[_U, k + 1], W[_P, k + 1], W[_H, k + 1], W[_PR, k + 1],
-                W[_PU, k + 1], V[k], Vt[k], p_pl[i], h_pl[i], omega, relax, gamma, 0.0)
+                W[_PU, k + 1], Vg, Vtg, p_pl[i], h_pl[i], omega, relax, gamma, kl)
         for i in range(c.size):
             _add(dy, b, ideal_maps[0], i, x_id[i])
             _add(dy, b, ideal_maps[1], i, x_id[i] * h_id[i])
@@ -251,11 +273,34 @@ def rhs_fused(y, n, na, V, iV, dV, Vt, area, wall, T_wall, w, omega, relax, ia, 
     return dy
 
 
-def _slots(W, y, b, n, na, iV, kind, par, tab, gamma, on):
-    """The slots' node values (W's columns 1..na) of batch member b."""
+def _flux_at(W, f, up, x, fanno, zeta, x_choke, rar):
+    """The gas's flux f(x) of flow f (upstream node ``up``): Fanno's, the nozzle's, or
+    the rarefied law's, whose inertial limit is the nozzle's."""
+    if fanno[f]:
+        return flows.fanno_f(x, zeta[f], x_choke[f])
+    fx = flows.nozzle_f_c(x, W[_XC, up], W[_CC, up], W[_IK, up])
+    if rar[0, f] > 0.0:
+        fx = flow_flux(fx, x, W[_P, up], W[_R, up], rar[2, f], rar[3, f], rar[4, f],
+                       rar[5, f], rar[6, f], rar[1, f] > 0.0)
+    return fx
+
+
+def _port_gas(V, Vt, y, dy, b, n, k, inv, w):
+    """Slot k's gas volume, its rate without the port's liquid and the liquid volume
+    leaving per kg of gas, as the ideal port sees them (:func:`.liquid.port_volumes`;
+    dy holds the liquid's leakage); V[k], Vt[k] and 0 without a liquid's volume."""
+    if not inv > 0.0:
+        return V[k], Vt[k], 0.0
+    mo = y[b, 2 * n + k]
+    return V[k] - mo * inv, Vt[k] - dy[b, 2 * n + k] * (inv / w), mo * inv / y[b, k]
+
+
+def _slots(W, y, b, n, na, V, iV, kind, par, tab, gamma, on, inv):
+    """The slots' node values (W's columns 1..na) of batch member b; a liquid (inv =
+    1 / rho_l > 0) leaves the gas the volume V - mo / rho_l."""
     for k in range(na):
         m = y[b, k]
-        rho = m * iV[k]
+        rho = m / (V[k] - y[b, 2 * n + k] * inv) if inv > 0.0 else m * iV[k]
         u = y[b, n + k] / m
         p, T, kap, pr, pu = fluid_state(kind, par, tab, rho, u)
         _node(W, k + 1, p, rho, u * gamma if gamma > 0.0 else u + p / rho, kap)
@@ -265,11 +310,17 @@ def _slots(W, y, b, n, na, iV, kind, par, tab, gamma, on):
             W[_OUT, k + 1] = 0.0
 
 
-def _oil_leak(dy, b, maps, row, F, W, up):
+def _oil_leak(dy, b, maps, row, F, W, up, x, inv):
     """:func:`.oil.homogeneous_split` of a leakage flow (the gas-only flow F, from node
-    ``up``): its oil added to dy through the maps' oil rows ``row``; returns the gas's
-    part."""
+    ``up``, pressure ratio x): its oil added to dy through the maps' oil rows ``row``;
+    returns the gas's part.  A liquid of finite density (inv = 1 / rho_l > 0) scales
+    the three by :func:`.liquid.mixture_factor` and carries its p / rho_l
+    (:func:`.oil.leakage`'s ``mix``)."""
     Fg, Fo, Eo = homogeneous_split(F, W[_X, up], W[_Y, up])
+    if inv > 0.0:
+        fac = mixture_factor(x, W[_K, up], W[_R, up], W[_X, up], inv)
+        Fg, Fo, Eo = Fg * fac, Fo * fac, Eo * fac
+        Eo += Fo * (W[_P, up] * inv)
     _add(dy, b, maps[0], row, Fo)
     _add(dy, b, maps[1], row, Eo)
     _add(dy, b, maps[2], row, abs(Fo))
@@ -289,18 +340,23 @@ def _oil_exit(dy, b, y, n, na, W, oil, x_id, c, nf, w):
     """:func:`.oil.slot_balances` for one batch member: the oil leaves each slot with the
     gas that flows out through a discharge port (the ideal ports' x_id; the nozzle
     ports' flows are in W's _OUT row already)."""
-    flags, acc_mo, acc_ho = oil[8], oil[9], oil[10]
+    flags, acc_mo, acc_ho, inv = oil[8], oil[9], oil[10], oil[11]
     for i in range(c.size):
         if flags[nf + i]:
             W[_OUT, c[i] + 1] += max(-x_id[i], 0.0)
     for k in range(na):
         mo, Ho = y[b, 2 * n + k], y[b, 3 * n + k]
         frac = W[_OUT, k + 1] / y[b, k]
-        Hx = Ho * frac
+        Hx = (Ho + W[_P, k + 1] * mo * inv) * frac
         dy[b, 2 * n + k] -= mo * frac * w
         dy[b, 3 * n + k] -= (W[_QO, k + 1] + Hx) * w
         dy[b, acc_mo] += mo * frac * w
         dy[b, acc_ho] += Hx * w
+    if inv > 0.0:  # (.liquid.volume_work: the gas's p dV_l moved to the liquid)
+        for k in range(na):
+            pdvl = W[_P, k + 1] * dy[b, 2 * n + k] * inv
+            dy[b, n + k] += pdvl
+            dy[b, 3 * n + k] -= pdvl
 
 
 # -- one segment in one compiled call (issue 19) ---------------------------------------

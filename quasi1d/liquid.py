@@ -91,7 +91,8 @@ def mixture_factor(x, kappa, rho_g, X, inv_rho_l):
     alpha = 1.0 / (1.0 + np.maximum(X, 0.0) * rho_g * inv_rho_l)
     ik = 1.0 / kappa
     g0 = omega_flux(x, ik)
-    ratio = np.where(g0 > 0.0, omega_flux(x, alpha * ik) / np.where(g0 > 0.0, g0, 1.0), 1.0)
+    live = g0 > 0.0  # (flows.select: compiled, one flow at a time, by .kernel.rhs_fused)
+    ratio = flows.select(live, omega_flux(x, alpha * ik) / flows.select(live, g0, 1.0), 1.0)
     return np.sqrt(alpha) * ratio
 
 

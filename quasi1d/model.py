@@ -341,12 +341,6 @@ class ChamberModel:
         if key not in self.fast:
             args = None
             if kernel.fusable(self, seg) and self.heat.constant:  # (h from T: numpy only)
-                nf = seg.ia.size
-                fanno, zeta, x_choke = np.zeros(nf, bool), np.zeros(nf), np.zeros(nf)
-                for grp in seg.groups:
-                    if grp.model == "fanno":
-                        fanno[grp.flows], zeta[grp.flows] = True, grp.zeta
-                        x_choke[grp.flows] = grp.x_choke
                 s, d = self.suc, self.dis
                 plen = np.array([[s.p, d.p], [s.rho, d.rho], [s.h, d.h], [s.kappa, d.kappa]])
                 acc0 = self.nv * self.n
@@ -354,7 +348,7 @@ class ChamberModel:
                 maps = (seg.mm, seg.me, seg.mg)
                 if oil_maps is not None:  # (rows n_flows + f: kernel._oil_leak)
                     maps = tuple(np.vstack(m) for m in zip(maps, oil_maps, strict=True))
-                args = (seg.ia, seg.ib, fanno, zeta, x_choke,
+                args = (seg.ia, seg.ib, *kernel.flow_laws(seg),
                         tuple(kernel.scatter(m) for m in maps),
                         acc0 + ACC_W, acc0 + ACC_Q, seg.ideal, seg.ideal_p, seg.ideal_h,
                         (kernel.scatter(seg.mx), kernel.scatter(seg.mxe)), plen,

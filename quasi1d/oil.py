@@ -191,7 +191,8 @@ def fused_args(model, seg) -> tuple:
     (oil injected, its leakage split off the gas's, leakage flows, c_oil, the enthalpy's
     datum temperature, the exchange time constant, the discharge plenum's X and Y,
     flags (per flow: a nozzle discharge port; then per ideal port: the discharge's), the
-    delivered oil's accumulator columns), the same types without oil (one compiled
+    delivered oil's accumulator columns, a liquid's 1 / rho_l or 0, :mod:`.liquid`),
+    the same types without oil (one compiled
     specialisation, scalars but one array: each array argument costs a compiled call
     two atomic reference counts); and the oil's leakage maps (mm, me, mg), which
     :meth:`.model.ChamberModel._fused_args` appends to the gas's as rows n_flows + f
@@ -208,5 +209,6 @@ def fused_args(model, seg) -> tuple:
     flags[nf:][np.asarray(seg.ideal_is_dis, dtype=bool)] = 1
     args = (on, split, int(seg.n_leak), float(op.oil_cp_J_kgK), float(model.liquid_datum_K),
             float(op.oil_time_constant_s), float(x_dis), float(y_dis), flags,
-            acc0 + c.oil_m_out if on else 0, acc0 + c.oil_h_out if on else 0)
+            acc0 + c.oil_m_out if on else 0, acc0 + c.oil_h_out if on else 0,
+            float(model.inv_rho_liquid))
     return args, ((seg.oil.mm, seg.oil.me, seg.oil.mg) if split else None)

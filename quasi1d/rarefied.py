@@ -89,6 +89,9 @@ N_FEW = 8
 X_FEW = 0.1
 _NODES = {n: (1.0 - g, w) for n, (g, w) in
           ((n, np.polynomial.legendre.leggauss(n)) for n in (N_GAUSS, N_FEW))}
+# (the same nodes as plain arrays, which the compiled kernel reads as constants)
+_OMG_WIDE, _GW_WIDE = _NODES[N_GAUSS]
+_OMG_FEW, _GW_FEW = _NODES[N_FEW]
 # Pressure ratios below this are taken as this: none occurs between the chambers of a
 # machine, and the flux changes by less than 1e-9 of itself (it is linear in 1 - x or in
 # 1 - x^2 there), while ln x stays finite for the quadrature.
@@ -135,6 +138,31 @@ def _rarefaction(kn, alpha_inf, slip, kn_beta=None):
     kn_beta = kn**BETA if kn_beta is None else kn_beta
     alpha = alpha_inf * (2.0 / math.pi) * np.arctan(ALPHA1 * kn_beta)
     return (1.0 + alpha * kn) * (1.0 + 6.0 * slip * kn / (1.0 + kn))
+
+
+def flow_flux(f_nozzle, x, p1, rho1, gap, land, viscosity, alpha_inf, slip, orifice):
+    """:meth:`RarefiedLaw.reduced_flux` of one flow (scalars; one flow at a time, as
+    :func:`.kernel.rhs_fused` calls it): the same law, its land integral summed node by
+    node instead of over an array axis (the two agree to round-off, tested)."""
+    kn1 = viscosity / p1 * math.sqrt(0.5 * math.pi * p1 / rho1) / gap
+    if orifice:
+        w = 1.0 / (1.0 + kn1)
+        return w * f_nozzle + (1.0 - w) * (1.0 - x) / math.sqrt(2.0 * math.pi)
+    xf = max(x, X_FLOOR)
+    half = -0.5 * math.log1p(xf - 1.0)
+    one_minus_g, gw = (_OMG_WIDE, _GW_WIDE) if xf < X_FEW else (_OMG_FEW, _GW_FEW)
+    kn_beta = kn1**BETA
+    total = 0.0
+    for j in range(gw.size):
+        z = half * one_minus_g[j]
+        e = math.exp(z)
+        r = _rarefaction(kn1 * e, alpha_inf, slip, kn_beta * math.exp(BETA * z))
+        total += gw[j] * r / (e * e)
+    f_v = (gap / land) * math.sqrt(0.5 * math.pi) / (12.0 * kn1) * (half * total)
+    if not f_nozzle > 0.0:  # (as reduced_flux: no inertial resistance at x = 1)
+        return f_v
+    w = 1.0 / (1.0 + 2.0 * kn1 / (1.0 + x))
+    return 2.0 * f_v / (1.0 + math.hypot(1.0, 2.0 * math.sqrt(w) * (f_v / f_nozzle)))
 
 
 def _per_node(v):
@@ -191,6 +219,13 @@ class RarefiedLaw:
         w = np.vectorize(slot_transmission, otypes=[float])(lh) if np.ndim(lh) else \
             slot_transmission(lh)
         return 12.0 * w * lh / (7.0 * math.pi)
+
+    def per_flow(self, count: int) -> np.ndarray:
+        """The law's parameters per flow for :func:`flow_flux` (the compiled kernel's):
+        rows orifice (0 or 1), gap, land, viscosity, alpha_inf, s over ``count`` flows."""
+        return np.array([np.broadcast_to(np.asarray(v, dtype=float), (count,))
+                         for v in (float(self.orifice), self.gap_m, self.land_m,
+                                   self.viscosity_Pa_s, self.alpha_inf, self.slip)])
 
     def knudsen(self, p, RT):
         return mean_free_path(self.viscosity_Pa_s, p, RT) / self.gap_m

@@ -7,6 +7,7 @@ cycles that agree far inside the integration tolerance.
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 
@@ -64,6 +65,21 @@ CASES = {
         _op(oil_mass_ratio=1.0, T_oil_K=300.0, heat_capacity="constant",
             heat_transfer_W_m2K=200.0),
         Leakage(gap_m=10e-6, model="nozzle", coefficient=0.8), Ports(model="nozzle")),
+    # a vacuum pump's gaps (quasi1d.rarefied: Kn ~ 0.01-0.1 at 0.05 bar over 100 um)
+    "rarefied leakage at 0.05 bar, ideal ports, heat transfer": (
+        _op(p_suction_bar=0.05, p_discharge_bar=1.0, volume_ratio=2.0,
+            heat_transfer_W_m2K=100.0, T_wall_K=353.15),
+        Leakage(gap_m=100e-6, model="rarefied", land_m=2e-3), Ports()),
+    # a multiphase pump's water (quasi1d.liquid): it fills volume, leaks with the gas by
+    # the omega method, pays its push-out work and leaves through the port with the gas
+    "liquid filling volume, rarefied leakage, ideal ports, heat transfer": (
+        _op(p_discharge_bar=8.0, volume_ratio=2.0, liquid_density_kg_m3=998.0,
+            liquid_cp_J_kgK=4180.0, gas_volume_fraction=0.7, heat_transfer_W_m2K=100.0),
+        Leakage(gap_m=30e-6, model="rarefied", land_m=2e-3), Ports()),
+    "liquid filling volume, nozzle leakage, nozzle ports": (
+        _op(p_discharge_bar=4.0, volume_ratio=2.0, liquid_density_kg_m3=998.0,
+            liquid_cp_J_kgK=4180.0, gas_volume_fraction=0.8),
+        Leakage(gap_m=20e-6, model="nozzle", coefficient=0.8), Ports(model="nozzle")),
 }
 
 
@@ -103,6 +119,10 @@ def test_compiled_rhs_equals_numpy(table, compiled_on, name):
             yy[:, n + new] = yy[:, new] * model.suc.u
             yy[:, na:n] = 0.0  # inactive slots hold nothing
             yy[:, n + na:2 * n] = 0.0
+            if model.inv_rho_liquid:  # a liquid in 25-35 % of each slot, 5 K warmer
+                ml = (0.3 + 0.05 * rng.uniform(-1, 1, (5, na))) * V[:na] / model.inv_rho_liquid
+                yy[:, 2 * n:2 * n + na] = ml
+                yy[:, 3 * n:3 * n + na] = ml * op.oil_cp_J_kgK * 5.0
             model.fast["kernel"] = None
             ref = model.rhs(theta, yy, seg)
             model.fast["kernel"] = compiled_on
@@ -169,7 +189,15 @@ def test_compiled_segment_equals_python_steps(table, compiled_on, method, name):
     assert again[0] == stepping.DONE and np.array_equal(again[2], got[2])
 
 
-@pytest.mark.parametrize("name", [*list(CASES)[:2], *list(CASES)[3:]])
+#: Whole cycles compared: not the CoolProp table's (slow to build; its right-hand side is
+#: compared above) nor a liquid's (stiff: 11-70 s a cycle either way on the sin2 chamber,
+#: the Rosenbrock Jacobian's batches, where numpy's arrays are as fast as the loops; its
+#: segments' thousands of steps drift apart by round-off beyond STEP_RTOL; the pump
+#: examples' figures agree within 1e-9 on the full machine, docs/quasi1d.md).
+CYCLE_CASES = [name for i, name in enumerate(CASES) if i != 2 and "liquid" not in name]
+
+
+@pytest.mark.parametrize("name", CYCLE_CASES)
 def test_compiled_cycle_equals_numpy(table, monkeypatch, name):
     op, leak, ports = CASES[name]
     monkeypatch.setenv("ROTORFLOW_COMPILED", "0")
@@ -207,17 +235,21 @@ def test_recorded_derivatives_are_the_right_hand_side(table, monkeypatch, name, 
         first += count
 
 
-def test_a_liquid_of_finite_density_or_a_volatile_one_stays_in_numpy(table):
-    """Injected oil is compiled (CASES); a liquid that takes chamber volume (a pump's
-    water) or evaporates is not (its laws are numpy's alone)."""
+def test_a_volatile_or_centrifuged_liquid_stays_in_numpy(table):
+    """Injected oil and a liquid that takes chamber volume (a pump's water) leaking as a
+    homogeneous mixture are compiled (CASES); a liquid that evaporates, or one flung
+    onto the bores (its own law in the casing gaps), is not (its laws are numpy's
+    alone)."""
     leak = Leakage(gap_m=10e-6, model="nozzle", coefficient=0.8)
-    for extra in ({"gas_volume_fraction": 0.8, "liquid_density_kg_m3": 998.0},
-                  {"oil_mass_ratio": 1.0, "liquid_volatile": "Water",
-                   "heat_capacity": "constant"}):
-        model = build_model(table, _op(**extra), leak, Ports())
+    water = {"gas_volume_fraction": 0.8, "liquid_density_kg_m3": 998.0}
+    for extra, lk in (({"oil_mass_ratio": 1.0, "liquid_volatile": "Water",
+                        "heat_capacity": "constant"}, leak),
+                      (water, dataclasses.replace(leak, mixture="centrifuged"))):
+        model = build_model(table, _op(**extra), lk, Ports())
         assert not any(kernel.fusable(model, seg) for seg in model.segments), extra
-    model = build_model(table, _op(oil_mass_ratio=2.0), leak, Ports())
-    assert all(kernel.fusable(model, seg) for seg in model.segments)
+    for extra in ({"oil_mass_ratio": 2.0}, water):
+        model = build_model(table, _op(**extra), leak, Ports())
+        assert all(kernel.fusable(model, seg) for seg in model.segments)
 
 
 def test_importing_the_model_does_not_load_numba():

@@ -17,8 +17,9 @@ from scipy.optimize import brentq
 from rotorflow.errors import CaseError
 from rotorflow.geometry.summary import build_machine, chamber_table
 from rotorflow.postprocess import pump_multiphase as pm
-from rotorflow.quasi1d import Operating, flows, liquid
+from rotorflow.quasi1d import Leakage, Operating, Ports, flows, liquid, simulate
 from rotorflow.quasi1d.settings import AIR_MOLAR_MASS_G_MOL
+from rotorflow.quasi1d.synthetic import sin2_table
 from rotorflow.workflow.case import case_from_raw, load_toml
 
 from .conftest import run_cli
@@ -234,6 +235,24 @@ def test_a_liquid_that_fills_the_chamber_is_refused():
     raw["operating"]["gas_volume_fraction"] = 0.45  # vi = 2 leaves half the volume
     with pytest.raises(CaseError, match="hydraulic lock"):
         pm.point(raw, table, str(pm.EXAMPLE))
+
+
+def test_a_liquid_that_leaves_the_gas_no_room_at_the_discharge_is_refused():
+    """beta = 1 - 1 / vi: the liquid alone fills what the chamber has left when the
+    discharge opens (the gas squeezed to nothing).  It ran until its step size underflowed
+    (exit 1) instead of naming the input; a little more gas runs."""
+    table = sin2_table(rows=241)
+    base = {"p_suction_bar": 1.0, "p_discharge_bar": 4.0, "T_suction_K": 300.0,
+            "speed_rpm": 3000.0, "volume_ratio": 2.0, "liquid_density_kg_m3": 998.0,
+            "liquid_cp_J_kgK": 4180.0}
+    with pytest.raises(CaseError) as e:
+        simulate(table, Operating.from_section({**base, "gas_volume_fraction": 0.5}, "t"),
+                 Leakage(model="none"), Ports())
+    assert "hydraulic lock" in str(e.value) and "gas_volume_fraction 0.5" in str(e.value)
+    assert "50.0% of" in str(e.value)
+    ok = simulate(table, Operating.from_section({**base, "gas_volume_fraction": 0.52}, "t"),
+                  Leakage(model="none"), Ports())
+    assert ok.converged
 
 
 @pytest.mark.parametrize("keys, word", [

@@ -25,6 +25,7 @@ from rotorflow.quasi1d.rarefied import (
     ALPHA1,
     BETA,
     RarefiedLaw,
+    flow_flux,
     mean_free_path,
     slot_transmission,
 )
@@ -111,6 +112,25 @@ def test_land_integral_matches_adaptive_quadrature():
             # 16 Gauss nodes in ln p: 1e-11 down to x = 1e-4, 8 from x = 0.1: 4e-13
             # (tolerance with margin)
             assert abs(got / (scale * exact) - 1.0) < 1e-9, (kn1, x)
+
+
+def test_one_flow_at_a_time_is_the_array_law():
+    """flow_flux (the compiled kernel's: one flow, the land's nodes summed in a loop)
+    against the law over arrays (reduced_flux: the nodes an array axis), from continuum
+    to free-molecular flow, across both node counts, for sealing lines and orifices:
+    the same arithmetic, so round-off apart."""
+    rng = np.random.default_rng(3)
+    p1 = 10.0 ** rng.uniform(-1.0, 6.0, 400)  # Kn ~ 1e-3 .. 1e4 on a 100 um gap
+    x = np.concatenate([10.0 ** rng.uniform(-6.0, 0.0, 398), [1.0, 0.1]])
+    rho1 = p1 / RT
+    for law in (_law(accommodation=0.8), _law(orifice=True), _law(land_over_gap=3.0)):
+        fn = nozzle_f(x, GAMMA)
+        ref = law.reduced_flux(fn, x, p1, rho1)
+        par = law.per_flow(x.size)
+        got = np.array([flow_flux(fn[i], x[i], p1[i], rho1[i], *par[1:, i], par[0, i] > 0)
+                        for i in range(x.size)])
+        assert np.all(got >= 0.0) and np.all(np.isfinite(got))
+        assert np.max(np.abs(got - ref) / np.maximum(np.abs(ref), 1e-300)) < 1e-12
 
 
 # -- continuum limit -------------------------------------------------------------------------
